@@ -1,0 +1,75 @@
+//! `robot-app`: the goalseek command-line program.
+
+use std::process::ExitCode;
+
+use clap::{ArgAction, Parser, Subcommand};
+use robot_app::cmd;
+
+/// Goal seeking, localisation and mapping with nothing but a 2D laser range finder.
+#[derive(Debug, Parser)]
+#[command(name = "robot-app", version, about, propagate_version = true)]
+struct Cli {
+    /// More logging (-v debug, -vv trace); RUST_LOG overrides.
+    #[arg(short, long, action = ArgAction::Count, global = true)]
+    verbose: u8,
+    /// Less logging (-q errors only, -qq nothing).
+    #[arg(short, long, action = ArgAction::Count, global = true)]
+    quiet: u8,
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// Run goal seeking in the simulator (default: the paper's scenario).
+    Sim(cmd::sim::SimArgs),
+    /// Run goal seeking on a real Hokuyo and a robot base.
+    Run(cmd::run::RunArgs),
+    /// Run many simulated runs in parallel and summarise them.
+    Batch(cmd::batch::BatchArgs),
+    /// Serve an emulated SCIP 2.0 Hokuyo on a pseudo-terminal.
+    Emulate(cmd::emulate::EmulateArgs),
+    /// Print a Hokuyo's version, parameters and state (VV, PP, II).
+    Info(cmd::info::InfoArgs),
+    /// Print scans from a Hokuyo or the simulator as CSV or JSON.
+    Scan(cmd::scan::ScanArgs),
+    /// Expand the obstacles of a scan CSV and print each ray's clearance.
+    Expand(cmd::expand::ExpandArgs),
+    /// Stream a recorded log through the live-sensor code path.
+    Replay(cmd::replay::ReplayArgs),
+    /// Build an occupancy grid from a log that carries poses.
+    Map(cmd::map::MapArgs),
+    /// Run landmark detection and tracking over a log and report statistics.
+    Landmarks(cmd::landmarks::LandmarksArgs),
+    /// Generate seeded random worlds for batch evaluation.
+    World(cmd::world::WorldArgs),
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    robot_app::logging::init(cli.verbose, cli.quiet);
+    let result = match cli.command {
+        Command::Sim(a) => cmd::sim::run(a),
+        Command::Run(a) => cmd::run::run(a),
+        Command::Batch(a) => cmd::batch::run(a),
+        Command::Emulate(a) => cmd::emulate::run(a),
+        Command::Info(a) => cmd::info::run(a),
+        Command::Scan(a) => cmd::scan::run(a),
+        Command::Expand(a) => cmd::expand::run(a),
+        Command::Replay(a) => cmd::replay::run(a),
+        Command::Map(a) => cmd::map::run(a),
+        Command::Landmarks(a) => cmd::landmarks::run(a),
+        Command::World(a) => cmd::world::run(a),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            // One line: the cause chain joined with ': '.
+            #[allow(clippy::print_stderr)]
+            {
+                eprintln!("robot-app: {e:#}");
+            }
+            ExitCode::FAILURE
+        }
+    }
+}

@@ -1,0 +1,151 @@
+//! The layering of `docs/architecture.md`, checked against `cargo metadata`.
+//!
+//! Every dependency edge between workspace crates (normal, build and dev) must be listed
+//! here; a new edge or a new crate fails this test until the drawing and this table agree.
+
+use std::collections::{BTreeMap, BTreeSet};
+use std::process::Command;
+
+/// Each workspace package and the workspace packages it may depend on.
+fn allowed() -> BTreeMap<&'static str, BTreeSet<&'static str>> {
+    const BOTTOM: &[&str] = &["scan-types"];
+    let all = [
+        "scan-types",
+        "urg-driver",
+        "sim-laser",
+        "scan-log",
+        "expansion",
+        "planner",
+        "landmarks",
+        "localiser",
+    ];
+    let table: &[(&str, &[&str])] = &[
+        // Layer 0.
+        ("scan-types", &[]),
+        // Layer 1: sources and the kernel, on scan-types only.
+        ("urg-driver", BOTTOM),
+        ("sim-laser", BOTTOM),
+        ("scan-log", BOTTOM),
+        ("expansion", BOTTOM),
+        // Layer 2: the method. Sideways edges: localiser -> landmarks (it localises on a
+        // tracked landmark), planner -> localiser (it plans over the map the localiser builds).
+        ("landmarks", &["scan-types"]),
+        ("localiser", &["scan-types", "landmarks"]),
+        ("planner", &["scan-types", "expansion", "localiser"]),
+        // Layer 3: the program, and the root package that owns tests/ and benches/.
+        ("robot-app", &all),
+        (
+            "goalseek",
+            &[
+                "scan-types",
+                "urg-driver",
+                "sim-laser",
+                "scan-log",
+                "expansion",
+                "planner",
+                "landmarks",
+                "localiser",
+                "robot-app",
+            ],
+        ),
+    ];
+    table
+        .iter()
+        .map(|(k, v)| (*k, v.iter().copied().collect()))
+        .collect()
+}
+
+fn metadata() -> serde_json::Value {
+    let out = Command::new(env!("CARGO"))
+        .args([
+            "metadata",
+            "--format-version",
+            "1",
+            "--no-deps",
+            "--offline",
+        ])
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .expect("cargo metadata runs");
+    assert!(
+        out.status.success(),
+        "cargo metadata failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).expect("cargo metadata prints JSON")
+}
+
+/// Workspace package name -> names of the workspace packages it depends on.
+fn edges(meta: &serde_json::Value) -> BTreeMap<String, BTreeSet<String>> {
+    let packages = meta["packages"].as_array().expect("packages array");
+    let names: BTreeSet<String> = packages
+        .iter()
+        .map(|p| p["name"].as_str().unwrap().to_string())
+        .collect();
+    packages
+        .iter()
+        .map(|p| {
+            let deps = p["dependencies"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|d| d["name"].as_str().unwrap().to_string())
+                .filter(|n| names.contains(n))
+                .collect();
+            (p["name"].as_str().unwrap().to_string(), deps)
+        })
+        .collect()
+}
+
+#[test]
+fn every_edge_is_allowed() {
+    let allowed = allowed();
+    let meta = metadata();
+    let mut bad = Vec::new();
+    for (pkg, deps) in edges(&meta) {
+        let Some(ok) = allowed.get(pkg.as_str()) else {
+            bad.push(format!(
+                "{pkg}: not in the layering table (add it to docs/architecture.md and this test)"
+            ));
+            continue;
+        };
+        for d in deps {
+            if !ok.contains(d.as_str()) {
+                bad.push(format!("{pkg} -> {d} is not an allowed edge"));
+            }
+        }
+    }
+    assert!(bad.is_empty(), "layering violations:\n{}", bad.join("\n"));
+}
+
+#[test]
+fn every_listed_crate_exists() {
+    let meta = metadata();
+    let present: BTreeSet<String> = edges(&meta).into_keys().collect();
+    for name in allowed().keys() {
+        assert!(
+            present.contains(*name),
+            "{name} is in the layering table but not in the workspace"
+        );
+    }
+}
+
+#[test]
+fn the_checker_rejects_an_upward_edge() {
+    // A hand-made metadata document with scan-types depending on planner must be caught.
+    let fake = serde_json::json!({"packages": [
+        {"name": "scan-types", "dependencies": [{"name": "planner"}]},
+        {"name": "planner", "dependencies": [{"name": "scan-types"}]}
+    ]});
+    let e = edges(&fake);
+    let allowed = allowed();
+    let violations: Vec<_> = e
+        .iter()
+        .flat_map(|(p, ds)| ds.iter().map(move |d| (p.clone(), d.clone())))
+        .filter(|(p, d)| !allowed[p.as_str()].contains(d.as_str()))
+        .collect();
+    assert_eq!(
+        violations,
+        vec![("scan-types".to_string(), "planner".to_string())]
+    );
+}
