@@ -1,5 +1,9 @@
 //! The goalseek program as a library: the goal-seeking loop and the commands of `robot-app`.
 
+pub mod base;
 pub mod cmd;
+pub mod config;
 pub mod logging;
+pub mod outputs;
+pub mod plot;
 pub mod scan_csv;

@@ -1,0 +1,353 @@
+//! The files a run leaves in its output folder: `summary.json`, `trajectory.csv`,
+//! `estimate.tum` and `truth.tum`, each written atomically (temp file + rename).
+
+use std::fmt::Write as _;
+use std::io::Write as _;
+use std::path::{Path, PathBuf};
+
+use anyhow::Context;
+use scan_types::{Pose2, WorldPoint, angle_diff_rad};
+use serde::{Deserialize, Serialize};
+
+/// Why a run ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Reason {
+    /// The estimate reached the target within tolerance.
+    Reached,
+    /// No way toward the target was found after the bounded number of tries.
+    Unreachable,
+    /// The leg limit was hit first.
+    LegLimit,
+    /// The robot touched an obstacle (simulator).
+    Collision,
+    /// The laser or the base failed.
+    SensorFailure,
+}
+
+impl std::fmt::Display for Reason {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Reason::Reached => "reached",
+            Reason::Unreachable => "unreachable",
+            Reason::LegLimit => "leg_limit",
+            Reason::Collision => "collision",
+            Reason::SensorFailure => "sensor_failure",
+        })
+    }
+}
+
+/// `summary.json`: the outcome of one run.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Summary {
+    /// True when the run ended at the target (in the simulator: the true position within the
+    /// success radius and no collision; on a real robot: the estimate within tolerance).
+    pub reached: bool,
+    /// Why the run ended.
+    pub reason: Reason,
+    /// Legs driven (one landmark fix or final approach each).
+    pub legs: usize,
+    /// Scans taken.
+    pub scans: usize,
+    /// Collisions recorded by the simulator (0 on a real robot).
+    pub collisions: usize,
+    /// Distance driven, metres (sum of the forward moves commanded).
+    pub path_length_m: f64,
+    /// Distance between the final estimate and the true position, metres (simulator only).
+    pub final_position_error_m: Option<f64>,
+    /// Final heading error, degrees (simulator only).
+    pub final_heading_error_deg: Option<f64>,
+    /// RMS of the position error at every leg end, metres (simulator only).
+    pub ate_rmse_m: Option<f64>,
+    /// True distance to the target at the end, metres (simulator only).
+    pub goal_distance_m: Option<f64>,
+    /// CPU time of the run, seconds (the loop's own thread).
+    pub cpu_time_s: f64,
+    /// Method preset used.
+    pub method: String,
+    /// Noise seed (simulator).
+    pub seed: Option<u64>,
+    /// Start pose `[x, y, theta_deg]`.
+    pub start: [f64; 3],
+    /// Target `[x, y]`.
+    pub goal: [f64; 2],
+    /// Final estimated pose `[x, y, theta_deg]`.
+    pub final_estimate: [f64; 3],
+    /// Final true pose `[x, y, theta_deg]` (simulator only).
+    pub final_truth: Option<[f64; 3]>,
+    /// A one-line note on how the run ended (the error, for a failure).
+    pub note: String,
+}
+
+/// One row of `trajectory.csv`: the pose at the end of a leg (row 0 is the start).
+#[derive(Debug, Clone, PartialEq)]
+pub struct LegRecord {
+    /// Leg number (0 = start).
+    pub leg: usize,
+    /// The robot's estimate.
+    pub estimate: Pose2,
+    /// The true pose (simulator only).
+    pub truth: Option<Pose2>,
+    /// The landmark the leg localised on, world frame by the estimate.
+    pub landmark: Option<WorldPoint>,
+    /// Point B of the leg (where the side ray should see the landmark).
+    pub point_b: Option<WorldPoint>,
+    /// The hits of the scan taken at the end of the leg, world frame by the estimate.
+    pub scan_points: Vec<WorldPoint>,
+}
+
+/// Everything a run records for its outputs and its plot.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct RunLog {
+    /// Target.
+    pub goal: Option<WorldPoint>,
+    /// Leg ends, starting with the start pose.
+    pub legs: Vec<LegRecord>,
+}
+
+impl RunLog {
+    /// Position errors (estimate against truth) of every row that has a truth.
+    pub fn position_errors_m(&self) -> Vec<f64> {
+        self.legs
+            .iter()
+            .filter_map(|r| {
+                r.truth
+                    .map(|t| r.estimate.position().distance_m(&t.position()))
+            })
+            .collect()
+    }
+
+    /// Root mean square of [`RunLog::position_errors_m`], or `None` without truth.
+    pub fn ate_rmse_m(&self) -> Option<f64> {
+        let e = self.position_errors_m();
+        if e.is_empty() {
+            return None;
+        }
+        Some((e.iter().map(|x| x * x).sum::<f64>() / e.len() as f64).sqrt())
+    }
+
+    /// Final position and heading error (metres, degrees) of the last row with a truth.
+    pub fn final_errors(&self) -> Option<(f64, f64)> {
+        let last = self.legs.last()?;
+        let t = last.truth?;
+        Some((
+            last.estimate.position().distance_m(&t.position()),
+            angle_diff_rad(last.estimate.theta_rad, t.theta_rad)
+                .abs()
+                .to_degrees(),
+        ))
+    }
+}
+
+/// Writes `bytes` to `path` atomically: a temporary file beside it, flushed, then renamed.
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
+    let dir = path
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    let name = path
+        .file_name()
+        .with_context(|| format!("{} has no file name", path.display()))?;
+    let tmp: PathBuf = dir.join(format!(
+        ".{}.tmp-{}",
+        name.to_string_lossy(),
+        std::process::id()
+    ));
+    let result = (|| -> std::io::Result<()> {
+        let mut f = std::fs::File::create(&tmp)?;
+        f.write_all(bytes)?;
+        f.sync_all()?;
+        std::fs::rename(&tmp, path)
+    })();
+    if result.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    result.with_context(|| format!("cannot write {}", path.display()))
+}
+
+/// Writes `summary.json` in `dir`.
+pub fn write_summary(dir: &Path, summary: &Summary) -> anyhow::Result<()> {
+    let mut text = serde_json::to_string_pretty(summary)?;
+    text.push('\n');
+    write_atomic(&dir.join("summary.json"), text.as_bytes())
+}
+
+fn opt(v: Option<f64>) -> String {
+    v.map_or_else(String::new, |x| format!("{x:.6}"))
+}
+
+/// `trajectory.csv` text: one row per leg end.
+pub fn trajectory_csv(log: &RunLog) -> String {
+    let mut s = String::from(
+        "leg,est_x_m,est_y_m,est_theta_rad,true_x_m,true_y_m,true_theta_rad,landmark_x_m,landmark_y_m,b_x_m,b_y_m\n",
+    );
+    for r in &log.legs {
+        let _ = writeln!(
+            s,
+            "{},{:.6},{:.6},{:.6},{},{},{},{},{},{},{}",
+            r.leg,
+            r.estimate.x_m,
+            r.estimate.y_m,
+            r.estimate.theta_rad,
+            opt(r.truth.map(|t| t.x_m)),
+            opt(r.truth.map(|t| t.y_m)),
+            opt(r.truth.map(|t| t.theta_rad)),
+            opt(r.landmark.map(|p| p.x_m())),
+            opt(r.landmark.map(|p| p.y_m())),
+            opt(r.point_b.map(|p| p.x_m())),
+            opt(r.point_b.map(|p| p.y_m())),
+        );
+    }
+    s
+}
+
+/// A TUM trajectory (`timestamp tx ty tz qx qy qz qw`, the leg number as the time stamp).
+pub fn tum(poses: impl IntoIterator<Item = (usize, Pose2)>) -> String {
+    let mut s = String::new();
+    for (leg, p) in poses {
+        let half = p.theta_rad / 2.0;
+        let _ = writeln!(
+            s,
+            "{:.6} {:.6} {:.6} 0.000000 0.000000 0.000000 {:.9} {:.9}",
+            leg as f64,
+            p.x_m,
+            p.y_m,
+            half.sin(),
+            half.cos()
+        );
+    }
+    s
+}
+
+/// Writes `trajectory.csv`, `estimate.tum` and (with truth) `truth.tum` in `dir`.
+pub fn write_trajectory(dir: &Path, log: &RunLog) -> anyhow::Result<()> {
+    write_atomic(&dir.join("trajectory.csv"), trajectory_csv(log).as_bytes())?;
+    write_atomic(
+        &dir.join("estimate.tum"),
+        tum(log.legs.iter().map(|r| (r.leg, r.estimate))).as_bytes(),
+    )?;
+    if log.legs.iter().any(|r| r.truth.is_some()) {
+        write_atomic(
+            &dir.join("truth.tum"),
+            tum(log.legs.iter().filter_map(|r| r.truth.map(|t| (r.leg, t)))).as_bytes(),
+        )?;
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::f64::consts::FRAC_PI_2;
+
+    fn row(leg: usize, est: (f64, f64), truth: (f64, f64)) -> LegRecord {
+        LegRecord {
+            leg,
+            estimate: Pose2::new(est.0, est.1, 0.0),
+            truth: Some(Pose2::new(truth.0, truth.1, 0.1)),
+            landmark: Some(WorldPoint::new(1.0, 2.0)),
+            point_b: None,
+            scan_points: vec![],
+        }
+    }
+
+    #[test]
+    fn ate_by_hand() {
+        // Rows with errors 0 and 5 (a 3-4-5 triangle): rmse = sqrt(25 / 2).
+        let log = RunLog {
+            goal: None,
+            legs: vec![
+                row(0, (0.0, 0.0), (0.0, 0.0)),
+                row(1, (3.0, 4.0), (0.0, 0.0)),
+            ],
+        };
+        assert!((log.ate_rmse_m().unwrap() - (12.5f64).sqrt()).abs() < 1e-12);
+        let (p, h) = log.final_errors().unwrap();
+        assert!((p - 5.0).abs() < 1e-12);
+        assert!((h - 0.1f64.to_degrees()).abs() < 1e-9);
+    }
+
+    #[test]
+    fn tum_quaternion_of_a_quarter_turn() {
+        let t = tum([(3, Pose2::new(1.0, 2.0, FRAC_PI_2))]);
+        let f: Vec<f64> = t.split_whitespace().map(|x| x.parse().unwrap()).collect();
+        assert_eq!(f.len(), 8);
+        assert_eq!(f[0], 3.0);
+        assert_eq!((f[1], f[2], f[3]), (1.0, 2.0, 0.0));
+        let h = std::f64::consts::FRAC_1_SQRT_2;
+        assert!((f[6] - h).abs() < 1e-9 && (f[7] - h).abs() < 1e-9);
+    }
+
+    #[test]
+    fn csv_leaves_missing_values_empty() {
+        let mut r = row(0, (0.5, 0.25), (0.0, 0.0));
+        r.truth = None;
+        let s = trajectory_csv(&RunLog {
+            goal: None,
+            legs: vec![r],
+        });
+        let lines: Vec<&str> = s.lines().collect();
+        assert_eq!(lines.len(), 2);
+        assert_eq!(lines[0].split(',').count(), 11);
+        assert_eq!(
+            lines[1],
+            "0,0.500000,0.250000,0.000000,,,,1.000000,2.000000,,"
+        );
+    }
+
+    #[test]
+    fn files_are_written_whole_and_no_temp_is_left() {
+        let dir = tempfile::tempdir().unwrap();
+        let log = RunLog {
+            goal: None,
+            legs: vec![row(0, (0.0, 0.0), (0.0, 0.0))],
+        };
+        write_trajectory(dir.path(), &log).unwrap();
+        let s = Summary {
+            reached: false,
+            reason: Reason::SensorFailure,
+            legs: 0,
+            scans: 1,
+            collisions: 0,
+            path_length_m: 0.0,
+            final_position_error_m: None,
+            final_heading_error_deg: None,
+            ate_rmse_m: None,
+            goal_distance_m: None,
+            cpu_time_s: 0.0,
+            method: "goalseek".into(),
+            seed: None,
+            start: [0.0; 3],
+            goal: [1.0, 1.0],
+            final_estimate: [0.0; 3],
+            final_truth: None,
+            note: "laser timed out".into(),
+        };
+        write_summary(dir.path(), &s).unwrap();
+        let text = std::fs::read_to_string(dir.path().join("summary.json")).unwrap();
+        let v: serde_json::Value = serde_json::from_str(&text).unwrap();
+        assert_eq!(v["reason"], "sensor_failure");
+        assert_eq!(v["reached"], false);
+        let mut names: Vec<String> = std::fs::read_dir(dir.path())
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        names.sort();
+        assert_eq!(
+            names,
+            [
+                "estimate.tum",
+                "summary.json",
+                "trajectory.csv",
+                "truth.tum"
+            ]
+        );
+    }
+
+    #[test]
+    fn atomic_write_into_missing_folder_is_an_error() {
+        let dir = tempfile::tempdir().unwrap();
+        let e = write_atomic(&dir.path().join("nope/x.json"), b"{}").unwrap_err();
+        assert!(format!("{e:#}").contains("nope/x.json"));
+    }
+}

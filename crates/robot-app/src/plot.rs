@@ -1,0 +1,302 @@
+//! `run.png` and `run.svg`: the paper's Fig. 13 for one run — the scans in the world frame,
+//! the estimated and the true path, each leg's landmark and point B, the start and the target.
+
+use std::path::Path;
+use std::sync::Once;
+
+use anyhow::{Context, anyhow};
+use plotters::coord::Shift;
+use plotters::prelude::*;
+use plotters::style::FontStyle;
+
+use crate::outputs::{RunLog, write_atomic};
+
+/// DejaVu Sans, shipped with the repository (bitmap text needs a registered font).
+const FONT: &[u8] = include_bytes!("../assets/DejaVuSans.ttf");
+const FAMILY: &str = "sans-serif";
+static REGISTER: Once = Once::new();
+
+fn register_font() {
+    REGISTER.call_once(|| {
+        // The embedded file is a valid font; a failure would only lose the text.
+        let _ = plotters::style::register_font(FAMILY, FontStyle::Normal, FONT);
+    });
+}
+
+/// Pixel size of the figures.
+const SIZE: (u32, u32) = (900, 900);
+
+/// Renders the run as PNG bytes.
+pub fn render_png(log: &RunLog, title: &str) -> anyhow::Result<Vec<u8>> {
+    register_font();
+    let (w, h) = SIZE;
+    let mut buf = vec![0u8; (w * h * 3) as usize];
+    {
+        let root = BitMapBackend::with_buffer(&mut buf, SIZE).into_drawing_area();
+        draw(&root, log, title).map_err(|e| anyhow!("drawing run.png: {e}"))?;
+        root.present()
+            .map_err(|e| anyhow!("drawing run.png: {e:?}"))?;
+    }
+    let img = image::RgbImage::from_raw(w, h, buf).context("plot buffer has the wrong size")?;
+    let mut png = Vec::new();
+    img.write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
+        .context("encoding run.png")?;
+    Ok(png)
+}
+
+/// Renders the run as SVG text.
+pub fn render_svg(log: &RunLog, title: &str) -> anyhow::Result<String> {
+    register_font();
+    let mut s = String::new();
+    {
+        let root = SVGBackend::with_string(&mut s, SIZE).into_drawing_area();
+        draw(&root, log, title).map_err(|e| anyhow!("drawing run.svg: {e}"))?;
+        root.present()
+            .map_err(|e| anyhow!("drawing run.svg: {e:?}"))?;
+    }
+    Ok(s)
+}
+
+/// Writes `run.png` and `run.svg` in `dir`.
+pub fn write_plots(dir: &Path, log: &RunLog, title: &str) -> anyhow::Result<()> {
+    write_atomic(&dir.join("run.png"), &render_png(log, title)?)?;
+    write_atomic(&dir.join("run.svg"), render_svg(log, title)?.as_bytes())
+}
+
+/// The square world window holding everything drawn, with a margin.
+fn bounds(log: &RunLog) -> (f64, f64, f64, f64) {
+    let mut pts: Vec<(f64, f64)> = Vec::new();
+    for r in &log.legs {
+        pts.push((r.estimate.x_m, r.estimate.y_m));
+        if let Some(t) = r.truth {
+            pts.push((t.x_m, t.y_m));
+        }
+        pts.extend(r.scan_points.iter().map(|p| (p.x_m(), p.y_m())));
+    }
+    if let Some(g) = log.goal {
+        pts.push((g.x_m(), g.y_m()));
+    }
+    let pts: Vec<(f64, f64)> = pts
+        .into_iter()
+        .filter(|(x, y)| x.is_finite() && y.is_finite())
+        .collect();
+    if pts.is_empty() {
+        return (-1.0, 1.0, -1.0, 1.0);
+    }
+    let (mut x0, mut x1, mut y0, mut y1) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
+    for (x, y) in pts {
+        x0 = x0.min(x);
+        x1 = x1.max(x);
+        y0 = y0.min(y);
+        y1 = y1.max(y);
+    }
+    let half = ((x1 - x0).max(y1 - y0) / 2.0 + 0.3).max(0.5);
+    let (cx, cy) = ((x0 + x1) / 2.0, (y0 + y1) / 2.0);
+    (cx - half, cx + half, cy - half, cy + half)
+}
+
+/// Scan hits thinned to one per 2 cm cell (the figure cannot show more).
+fn thinned_scan_points(log: &RunLog) -> Vec<(f64, f64)> {
+    let mut seen = std::collections::HashSet::new();
+    let mut out = Vec::new();
+    for r in &log.legs {
+        for p in &r.scan_points {
+            if !(p.x_m().is_finite() && p.y_m().is_finite()) {
+                continue;
+            }
+            let key = (
+                (p.x_m() / 0.02).round() as i64,
+                (p.y_m() / 0.02).round() as i64,
+            );
+            if seen.insert(key) {
+                out.push((p.x_m(), p.y_m()));
+            }
+        }
+    }
+    out
+}
+
+fn draw<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    log: &RunLog,
+    title: &str,
+) -> Result<(), String> {
+    let err = |e: DrawingAreaErrorKind<DB::ErrorType>| format!("{e:?}");
+    root.fill(&WHITE).map_err(err)?;
+    let (x0, x1, y0, y1) = bounds(log);
+    let mut chart = ChartBuilder::on(root)
+        .caption(title, (FAMILY, 22))
+        .margin(14)
+        .x_label_area_size(44)
+        .y_label_area_size(54)
+        .build_cartesian_2d(x0..x1, y0..y1)
+        .map_err(err)?;
+    chart
+        .configure_mesh()
+        .x_desc("x (m)")
+        .y_desc("y (m)")
+        .label_style((FAMILY, 14))
+        .light_line_style(RGBColor(235, 235, 235))
+        .draw()
+        .map_err(err)?;
+
+    let scan_colour = RGBColor(150, 150, 150);
+    chart
+        .draw_series(
+            thinned_scan_points(log)
+                .into_iter()
+                .map(|p| Circle::new(p, 1, scan_colour.filled())),
+        )
+        .map_err(err)?
+        .label("scans (world frame, estimated pose)")
+        .legend(move |(x, y)| Circle::new((x + 8, y), 3, scan_colour.filled()));
+
+    let truth: Vec<(f64, f64)> = log
+        .legs
+        .iter()
+        .filter_map(|r| r.truth.map(|t| (t.x_m, t.y_m)))
+        .collect();
+    if !truth.is_empty() {
+        chart
+            .draw_series(LineSeries::new(truth, RED.stroke_width(2)))
+            .map_err(err)?
+            .label("true path")
+            .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], RED.stroke_width(2)));
+    }
+    let est: Vec<(f64, f64)> = log
+        .legs
+        .iter()
+        .map(|r| (r.estimate.x_m, r.estimate.y_m))
+        .collect();
+    chart
+        .draw_series(LineSeries::new(est.clone(), BLUE.stroke_width(2)))
+        .map_err(err)?
+        .label("estimated path")
+        .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], BLUE.stroke_width(2)));
+    chart
+        .draw_series(est.iter().map(|&p| Circle::new(p, 3, BLUE.filled())))
+        .map_err(err)?;
+
+    let green = RGBColor(0, 150, 0);
+    chart
+        .draw_series(
+            log.legs
+                .iter()
+                .filter_map(|r| r.landmark)
+                .map(|p| TriangleMarker::new((p.x_m(), p.y_m()), 6, green.filled())),
+        )
+        .map_err(err)?
+        .label("landmark of each leg")
+        .legend(move |(x, y)| TriangleMarker::new((x + 8, y), 6, green.filled()));
+    chart
+        .draw_series(
+            log.legs
+                .iter()
+                .filter_map(|r| r.point_b)
+                .map(|p| Cross::new((p.x_m(), p.y_m()), 5, MAGENTA.stroke_width(2))),
+        )
+        .map_err(err)?
+        .label("point B of each leg")
+        .legend(|(x, y)| Cross::new((x + 8, y), 5, MAGENTA.stroke_width(2)));
+
+    if let Some(s) = log.legs.first() {
+        let p = s.truth.unwrap_or(s.estimate);
+        chart
+            .draw_series(std::iter::once(Circle::new(
+                (p.x_m, p.y_m),
+                7,
+                BLACK.filled(),
+            )))
+            .map_err(err)?
+            .label("start")
+            .legend(|(x, y)| Circle::new((x + 8, y), 5, BLACK.filled()));
+    }
+    if let Some(g) = log.goal {
+        let orange = RGBColor(230, 120, 0);
+        chart
+            .draw_series(std::iter::once(Cross::new(
+                (g.x_m(), g.y_m()),
+                9,
+                orange.stroke_width(3),
+            )))
+            .map_err(err)?
+            .label("target")
+            .legend(move |(x, y)| Cross::new((x + 8, y), 6, orange.stroke_width(3)));
+    }
+    chart
+        .configure_series_labels()
+        .label_font((FAMILY, 14))
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .position(SeriesLabelPosition::UpperLeft)
+        .draw()
+        .map_err(err)?;
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::outputs::LegRecord;
+    use scan_types::{Pose2, WorldPoint};
+
+    fn log() -> RunLog {
+        let mut legs = Vec::new();
+        for i in 0..4 {
+            let f = i as f64;
+            legs.push(LegRecord {
+                leg: i,
+                estimate: Pose2::new(f, f, 0.5),
+                truth: Some(Pose2::new(f + 0.05, f, 0.5)),
+                landmark: Some(WorldPoint::new(f + 0.5, f - 0.5)),
+                point_b: Some(WorldPoint::new(f + 0.4, f + 0.4)),
+                scan_points: (0..100)
+                    .map(|k| WorldPoint::new(-1.0 + k as f64 * 0.05, 4.0))
+                    .collect(),
+            });
+        }
+        RunLog {
+            goal: Some(WorldPoint::new(3.5, 3.5)),
+            legs,
+        }
+    }
+
+    #[test]
+    fn png_is_a_png_of_the_right_size_with_ink() {
+        let png = render_png(&log(), "test run").unwrap();
+        let img = image::load_from_memory(&png).unwrap().to_rgb8();
+        assert_eq!(img.dimensions(), SIZE);
+        // Some pixels are pure blue (the estimated path) and most are white.
+        let blue = img.pixels().filter(|p| p.0 == [0, 0, 255]).count();
+        let white = img.pixels().filter(|p| p.0 == [255, 255, 255]).count();
+        assert!(blue > 50, "blue pixels: {blue}");
+        assert!(white > (SIZE.0 * SIZE.1 / 2) as usize);
+    }
+
+    #[test]
+    fn svg_has_legend_and_axes() {
+        let svg = render_svg(&log(), "test run").unwrap();
+        for label in [
+            "estimated path",
+            "true path",
+            "point B",
+            "target",
+            "x (m)",
+            "y (m)",
+        ] {
+            assert!(svg.contains(label), "missing {label}");
+        }
+    }
+
+    #[test]
+    fn empty_log_still_draws() {
+        assert!(render_png(&RunLog::default(), "empty").is_ok());
+    }
+
+    #[test]
+    fn bounds_are_square_and_hold_everything() {
+        let (x0, x1, y0, y1) = bounds(&log());
+        assert!((x1 - x0 - (y1 - y0)).abs() < 1e-12);
+        assert!(x0 <= -1.0 && x1 >= 3.55 && y0 <= -0.5 && y1 >= 4.0);
+    }
+}
