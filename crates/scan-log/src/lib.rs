@@ -1,4 +1,46 @@
-//! Recorded laser data: CARMEN, BreezySLAM and MCAP logs read as a `LaserSource`,
-//! and MCAP recording with the Foxglove `LaserScan` schema.
+//! Recorded laser data: CARMEN, BreezySLAM and goalseek MCAP logs read as a
+//! [`LaserSource`](scan_types::LaserSource), and MCAP recording with the Foxglove
+//! `LaserScan` and `PoseInFrame` schemas.
 //!
-//! Status: under construction; see the issue tracker. Nothing here is finished yet.
+//! - [`LogReader`]: every record of a log as `Result<LogRecord, LogError>`, so a malformed
+//!   line is reported (file, line, byte offset) and the rest of the log still reads.
+//! - [`LogSource`]: the same log as a `LaserSource` that skips and counts bad records and
+//!   exposes the recorded pose of the last scan ([`LogSource::pose`]).
+//! - [`McapRecorder`]: writes scans and poses to an MCAP file that Foxglove opens as it is,
+//!   atomically (temp file + rename); [`read_mcap`] reads it back bit for bit.
+//!
+//! ```
+//! use scan_log::{LogOptions, LogSource};
+//! use scan_types::LaserSource;
+//! let dir = tempfile::tempdir().unwrap();
+//! let path = dir.path().join("tiny.log");
+//! std::fs::write(&path, "ODOM 0 0 0 0 0 0 0.1 h 0.1\nFLASER 3 1.0 2.0 99 0.5 0.0 0.0 0 0 0 7.5 h 7.5\n").unwrap();
+//! let mut src = LogSource::open(&path, &LogOptions::default()).unwrap();
+//! assert_eq!(src.geometry().ray_count, 3);
+//! let scan = src.next_scan().unwrap();
+//! assert_eq!(scan.ranges_m[..2], [1.0, 2.0]);
+//! assert!(scan.is_max_range(2));
+//! assert_eq!(src.pose().unwrap().x_m, 0.5);
+//! assert!(src.next_scan().unwrap_err().is_end_of_log());
+//! ```
+
+mod breezy;
+mod carmen;
+mod error;
+mod mcap_io;
+mod record;
+mod source;
+mod text;
+
+pub use breezy::{
+    BREEZY_HEADER_FIELDS, BREEZY_RAY_COUNT, URG_DMIN_MM, breezy_geometry, classify_mm,
+};
+pub use carmen::{CARMEN_DEFAULT_MAX_RANGE_M, flaser_geometry};
+pub use error::LogError;
+pub use mcap_io::{
+    EST_POSE_TOPIC, McapRecorder, SCAN_TOPIC, STATUS_HIT, STATUS_MAX_RANGE, TRUE_POSE_TOPIC,
+    parse_mcap, partial_path, read_mcap,
+};
+pub use record::LogRecord;
+pub use source::{LogFormat, LogOptions, LogReader, LogSource, open_text};
+pub use text::{TextFormat, TextLog};

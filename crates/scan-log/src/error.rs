@@ -1,0 +1,101 @@
+//! The crate's error type.
+
+use std::path::PathBuf;
+
+/// What can go wrong while reading or writing a log.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum LogError {
+    /// Reading or writing the file failed.
+    #[error("{}: {source}", path.display())]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The I/O error.
+        #[source]
+        source: std::io::Error,
+    },
+    /// A line of a text log is truncated or malformed.
+    #[error("{}:{line} (byte {byte_offset}): {message}", path.display())]
+    Parse {
+        /// The file.
+        path: PathBuf,
+        /// Line number, 1-based.
+        line: usize,
+        /// Byte offset of the line's start in the (decompressed) text.
+        byte_offset: u64,
+        /// What is wrong.
+        message: String,
+    },
+    /// The MCAP container is damaged or cannot be written.
+    #[error("{}: MCAP: {source}", path.display())]
+    Mcap {
+        /// The file.
+        path: PathBuf,
+        /// The MCAP error.
+        #[source]
+        source: mcap::McapError,
+    },
+    /// One message of an MCAP recording does not decode.
+    #[error("{}: message {index} on {topic}: {message}", path.display())]
+    Message {
+        /// The file.
+        path: PathBuf,
+        /// Index of the message in the file, 0-based.
+        index: usize,
+        /// Its topic.
+        topic: String,
+        /// What is wrong.
+        message: String,
+    },
+    /// The file's format cannot be told from its name or its first bytes.
+    #[error("{}: unknown log format (expected a CARMEN .log/.log.gz/.clf, a BreezySLAM .dat or an .mcap recording)", path.display())]
+    UnknownFormat {
+        /// The file.
+        path: PathBuf,
+    },
+    /// A scan's ray count differs from the geometry of the log.
+    #[error("{}:{line}: scan has {got} rays, the log's geometry has {expected}", path.display())]
+    RayCountMismatch {
+        /// The file.
+        path: PathBuf,
+        /// Line number (text logs) or message index (MCAP).
+        line: usize,
+        /// Rays in this scan.
+        got: usize,
+        /// Rays in the geometry.
+        expected: usize,
+    },
+    /// The log holds no readable scan.
+    #[error("{}: no readable scan in the log ({skipped} records skipped)", path.display())]
+    NoScans {
+        /// The file.
+        path: PathBuf,
+        /// Records that failed to parse.
+        skipped: usize,
+    },
+    /// The source has delivered every scan of the log.
+    #[error("{}: end of log after {scans} scans", path.display())]
+    EndOfLog {
+        /// The file.
+        path: PathBuf,
+        /// Scans delivered.
+        scans: usize,
+    },
+    /// A geometry read from the log or given by the caller is invalid.
+    #[error("invalid geometry: {0}")]
+    Geometry(#[from] scan_types::ScanTypesError),
+    /// The recorder was used after `finish`.
+    #[error("{}: the recording is already finished", path.display())]
+    Finished {
+        /// The file.
+        path: PathBuf,
+    },
+}
+
+impl LogError {
+    /// True for the end-of-log marker of [`crate::LogSource`].
+    pub fn is_end_of_log(&self) -> bool {
+        matches!(self, LogError::EndOfLog { .. })
+    }
+}

@@ -1,0 +1,541 @@
+//! goalseek's MCAP recordings: Foxglove `foxglove.LaserScan` and `foxglove.PoseInFrame`
+//! messages in JSON encoding, plus the exact values goalseek needs to replay them bit for bit.
+
+use std::collections::BTreeMap;
+use std::fs::File;
+use std::io::BufWriter;
+use std::path::{Path, PathBuf};
+
+use mcap::read::Options;
+use scan_types::{Pose2, RayStatus, Scan, ScanGeometry};
+use serde::{Deserialize, Serialize};
+
+use crate::{LogError, LogRecord};
+
+/// Topic of the scans.
+pub const SCAN_TOPIC: &str = "/scan";
+/// Topic of the simulator's true poses.
+pub const TRUE_POSE_TOPIC: &str = "/pose/true";
+/// Topic of the estimated poses.
+pub const EST_POSE_TOPIC: &str = "/pose/estimated";
+
+/// Status code of a hit ray in the `goalseek.status` array.
+pub const STATUS_HIT: i32 = -1;
+/// Status code of a max-range ray in the `goalseek.status` array (error codes are >= 0).
+pub const STATUS_MAX_RANGE: i32 = -2;
+
+const LASER_SCAN_SCHEMA: &str = r#"{
+  "title": "foxglove.LaserScan",
+  "description": "A single scan from a planar laser range-finder (goalseek adds the exact values in 'goalseek')",
+  "type": "object",
+  "properties": {
+    "timestamp": {"type": "object", "properties": {"sec": {"type": "integer", "minimum": 0}, "nsec": {"type": "integer", "minimum": 0, "maximum": 999999999}}},
+    "frame_id": {"type": "string"},
+    "pose": {"type": "object", "properties": {
+      "position": {"type": "object", "properties": {"x": {"type": "number"}, "y": {"type": "number"}, "z": {"type": "number"}}},
+      "orientation": {"type": "object", "properties": {"x": {"type": "number"}, "y": {"type": "number"}, "z": {"type": "number"}, "w": {"type": "number"}}}}},
+    "start_angle": {"type": "number"},
+    "end_angle": {"type": "number"},
+    "ranges": {"type": "array", "items": {"type": "number"}},
+    "intensities": {"type": "array", "items": {"type": "number"}},
+    "goalseek": {"type": "object"}
+  }
+}"#;
+
+const POSE_SCHEMA: &str = r#"{
+  "title": "foxglove.PoseInFrame",
+  "description": "A timestamped pose in a named coordinate frame (goalseek adds the exact pose in 'goalseek')",
+  "type": "object",
+  "properties": {
+    "timestamp": {"type": "object", "properties": {"sec": {"type": "integer", "minimum": 0}, "nsec": {"type": "integer", "minimum": 0, "maximum": 999999999}}},
+    "frame_id": {"type": "string"},
+    "pose": {"type": "object", "properties": {
+      "position": {"type": "object", "properties": {"x": {"type": "number"}, "y": {"type": "number"}, "z": {"type": "number"}}},
+      "orientation": {"type": "object", "properties": {"x": {"type": "number"}, "y": {"type": "number"}, "z": {"type": "number"}, "w": {"type": "number"}}}}},
+    "goalseek": {"type": "object"}
+  }
+}"#;
+
+#[derive(Serialize, Deserialize)]
+struct Time {
+    sec: u64,
+    nsec: u32,
+}
+
+#[derive(Serialize, Deserialize)]
+struct Vec3 {
+    x: f64,
+    y: f64,
+    z: f64,
+}
+
+#[derive(Serialize, Deserialize)]
+struct Quat {
+    x: f64,
+    y: f64,
+    z: f64,
+    w: f64,
+}
+
+#[derive(Serialize, Deserialize)]
+struct FoxPose {
+    position: Vec3,
+    orientation: Quat,
+}
+
+impl FoxPose {
+    fn of(p: Option<Pose2>) -> Self {
+        let p = p.unwrap_or_default();
+        let h = p.theta_rad / 2.0;
+        FoxPose {
+            position: Vec3 {
+                x: p.x_m,
+                y: p.y_m,
+                z: 0.0,
+            },
+            orientation: Quat {
+                x: 0.0,
+                y: 0.0,
+                z: h.sin(),
+                w: h.cos(),
+            },
+        }
+    }
+}
+
+/// The exact scan as goalseek wrote it.
+#[derive(Serialize, Deserialize)]
+struct ScanExtra {
+    seq: u64,
+    host_time_s: f64,
+    sensor_time_ms: Option<u64>,
+    first_bearing_rad: f64,
+    increment_rad: f64,
+    ray_count: usize,
+    min_range_m: f64,
+    max_range_m: f64,
+    status: Vec<i32>,
+}
+
+#[derive(Serialize, Deserialize)]
+struct LaserScanMsg {
+    timestamp: Time,
+    frame_id: String,
+    pose: FoxPose,
+    start_angle: f64,
+    end_angle: f64,
+    ranges: Vec<f64>,
+    intensities: Vec<f64>,
+    goalseek: ScanExtra,
+}
+
+#[derive(Serialize, Deserialize)]
+struct PoseExtra {
+    seq: u64,
+    x_m: f64,
+    y_m: f64,
+    theta_rad: f64,
+}
+
+#[derive(Serialize, Deserialize)]
+struct PoseMsg {
+    timestamp: Time,
+    frame_id: String,
+    pose: FoxPose,
+    goalseek: PoseExtra,
+}
+
+fn time_of(host_time_s: f64) -> (Time, u64) {
+    let t = if host_time_s.is_finite() && host_time_s > 0.0 {
+        host_time_s
+    } else {
+        0.0
+    };
+    let ns = (t * 1e9).round();
+    let ns = if ns >= u64::MAX as f64 {
+        u64::MAX
+    } else {
+        ns as u64
+    };
+    (
+        Time {
+            sec: ns / 1_000_000_000,
+            nsec: (ns % 1_000_000_000) as u32,
+        },
+        ns,
+    )
+}
+
+/// Writes a goalseek MCAP recording, atomically.
+///
+/// The file is written as `<path>.partial` in the same directory and renamed to `path` by
+/// [`McapRecorder::finish`]. Every scan ends an MCAP chunk and is flushed, so if the process
+/// dies, `<path>.partial` holds every scan recorded so far and [`read_mcap`] reads them (it
+/// reports the cut as an error after the last whole scan). Dropping the recorder without
+/// `finish` (an error or panic unwinding) finishes and renames the file as `finish` would.
+pub struct McapRecorder {
+    writer: Option<mcap::Writer<BufWriter<File>>>,
+    tmp_path: PathBuf,
+    path: PathBuf,
+    scan_ch: u16,
+    true_ch: u16,
+    est_ch: u16,
+    seq: u64,
+}
+
+/// The temporary name a recording has until it is finished.
+pub fn partial_path(path: &Path) -> PathBuf {
+    let mut name = path.file_name().unwrap_or_default().to_os_string();
+    name.push(".partial");
+    path.with_file_name(name)
+}
+
+impl McapRecorder {
+    /// Starts a recording that will be at `path` once finished.
+    pub fn create(path: &Path) -> Result<Self, LogError> {
+        let tmp_path = partial_path(path);
+        let io = |source| LogError::Io {
+            path: tmp_path.clone(),
+            source,
+        };
+        let file = File::create(&tmp_path).map_err(io)?;
+        let mcap_err = |source| LogError::Mcap {
+            path: tmp_path.clone(),
+            source,
+        };
+        let mut writer = mcap::WriteOptions::new()
+            .compression(None)
+            .profile("")
+            .create(BufWriter::new(file))
+            .map_err(mcap_err)?;
+        let scan_schema = writer
+            .add_schema(
+                "foxglove.LaserScan",
+                "jsonschema",
+                LASER_SCAN_SCHEMA.as_bytes(),
+            )
+            .map_err(mcap_err)?;
+        let pose_schema = writer
+            .add_schema("foxglove.PoseInFrame", "jsonschema", POSE_SCHEMA.as_bytes())
+            .map_err(mcap_err)?;
+        let meta = BTreeMap::new();
+        let scan_ch = writer
+            .add_channel(scan_schema, SCAN_TOPIC, "json", &meta)
+            .map_err(mcap_err)?;
+        let true_ch = writer
+            .add_channel(pose_schema, TRUE_POSE_TOPIC, "json", &meta)
+            .map_err(mcap_err)?;
+        let est_ch = writer
+            .add_channel(pose_schema, EST_POSE_TOPIC, "json", &meta)
+            .map_err(mcap_err)?;
+        Ok(Self {
+            writer: Some(writer),
+            tmp_path,
+            path: path.to_path_buf(),
+            scan_ch,
+            true_ch,
+            est_ch,
+            seq: 0,
+        })
+    }
+
+    /// The final path of the recording.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// Scans recorded so far.
+    pub fn scans(&self) -> u64 {
+        self.seq
+    }
+
+    /// Records one scan with its geometry and, where known, the true and estimated poses.
+    ///
+    /// In Foxglove the scan is drawn in frame `world` at the estimated pose (else the true
+    /// pose) when one is given, and in frame `laser` otherwise.
+    pub fn record_scan(
+        &mut self,
+        geometry: &ScanGeometry,
+        scan: &Scan,
+        true_pose: Option<Pose2>,
+        est_pose: Option<Pose2>,
+    ) -> Result<(), LogError> {
+        let tmp = self.tmp_path.clone();
+        let writer = self.writer.as_mut().ok_or_else(|| LogError::Finished {
+            path: self.path.clone(),
+        })?;
+        let mcap_err = |source| LogError::Mcap {
+            path: tmp.clone(),
+            source,
+        };
+        let seq = self.seq;
+        let (stamp, ns) = time_of(scan.host_time_s);
+        let shown = est_pose.or(true_pose);
+        let msg = LaserScanMsg {
+            timestamp: Time {
+                sec: stamp.sec,
+                nsec: stamp.nsec,
+            },
+            frame_id: if shown.is_some() { "world" } else { "laser" }.into(),
+            pose: FoxPose::of(shown),
+            start_angle: geometry.first_bearing_rad,
+            end_angle: geometry.last_bearing_rad(),
+            ranges: scan
+                .ranges_m
+                .iter()
+                .map(|&r| if r.is_finite() { r } else { 0.0 })
+                .collect(),
+            intensities: scan
+                .intensities
+                .as_ref()
+                .map(|v| v.iter().map(|&x| f64::from(x)).collect())
+                .unwrap_or_default(),
+            goalseek: ScanExtra {
+                seq,
+                host_time_s: scan.host_time_s,
+                sensor_time_ms: scan.sensor_time_ms,
+                first_bearing_rad: geometry.first_bearing_rad,
+                increment_rad: geometry.increment_rad,
+                ray_count: geometry.ray_count,
+                min_range_m: geometry.min_range_m,
+                max_range_m: geometry.max_range_m,
+                status: scan
+                    .status
+                    .iter()
+                    .map(|s| match s {
+                        RayStatus::Hit => STATUS_HIT,
+                        RayStatus::MaxRange => STATUS_MAX_RANGE,
+                        RayStatus::Error(c) => i32::from(*c),
+                    })
+                    .collect(),
+            },
+        };
+        let data = serde_json::to_vec(&msg).expect("plain data serialises");
+        let header = |channel_id| mcap::records::MessageHeader {
+            channel_id,
+            sequence: seq as u32,
+            log_time: ns,
+            publish_time: ns,
+        };
+        writer
+            .write_to_known_channel(&header(self.scan_ch), &data)
+            .map_err(mcap_err)?;
+        for (ch, pose) in [(self.true_ch, true_pose), (self.est_ch, est_pose)] {
+            let Some(p) = pose else { continue };
+            let msg = PoseMsg {
+                timestamp: Time {
+                    sec: stamp.sec,
+                    nsec: stamp.nsec,
+                },
+                frame_id: "world".into(),
+                pose: FoxPose::of(Some(p)),
+                goalseek: PoseExtra {
+                    seq,
+                    x_m: p.x_m,
+                    y_m: p.y_m,
+                    theta_rad: p.theta_rad,
+                },
+            };
+            let data = serde_json::to_vec(&msg).expect("plain data serialises");
+            writer
+                .write_to_known_channel(&header(ch), &data)
+                .map_err(mcap_err)?;
+        }
+        // End the chunk so a crash keeps every scan recorded so far.
+        writer.flush().map_err(mcap_err)?;
+        self.seq += 1;
+        Ok(())
+    }
+
+    /// Writes the MCAP summary and moves the file to its final name; returns the scan count.
+    pub fn finish(mut self) -> Result<u64, LogError> {
+        self.finish_inner()
+    }
+
+    fn finish_inner(&mut self) -> Result<u64, LogError> {
+        let Some(mut writer) = self.writer.take() else {
+            return Ok(self.seq);
+        };
+        let tmp = self.tmp_path.clone();
+        writer.finish().map_err(|source| LogError::Mcap {
+            path: tmp.clone(),
+            source,
+        })?;
+        let mut inner = writer.into_inner();
+        let io = |source| LogError::Io {
+            path: tmp.clone(),
+            source,
+        };
+        std::io::Write::flush(&mut inner).map_err(io)?;
+        let file = inner.into_inner().map_err(|e| io(e.into_error()))?;
+        file.sync_all().map_err(io)?;
+        drop(file);
+        std::fs::rename(&tmp, &self.path).map_err(|source| LogError::Io {
+            path: self.path.clone(),
+            source,
+        })?;
+        Ok(self.seq)
+    }
+}
+
+impl Drop for McapRecorder {
+    fn drop(&mut self) {
+        if self.writer.is_some() {
+            match self.finish_inner() {
+                Ok(n) => tracing::warn!(
+                    "recording {} dropped without finish: closed it with {n} scans",
+                    self.path.display()
+                ),
+                Err(e) => {
+                    tracing::error!("recording dropped without finish and could not be closed: {e}")
+                }
+            }
+        }
+    }
+}
+
+/// Reads every scan of a goalseek MCAP recording, in order, each with its poses.
+///
+/// A damaged or cut file yields the scans before the damage, then one error.
+pub fn read_mcap(path: &Path) -> Result<Vec<Result<LogRecord, LogError>>, LogError> {
+    let bytes = std::fs::read(path).map_err(|source| LogError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    Ok(parse_mcap(&bytes, path))
+}
+
+/// Parses recording bytes (see [`read_mcap`]); `path` names the source in errors.
+pub fn parse_mcap(bytes: &[u8], path: &Path) -> Vec<Result<LogRecord, LogError>> {
+    let mut out: Vec<Result<LogRecord, LogError>> = Vec::new();
+    // Index into `out` of the record of each scan sequence number.
+    let mut by_seq: BTreeMap<u64, usize> = BTreeMap::new();
+    let stream = match mcap::MessageStream::new_with_options(bytes, Options::IgnoreEndMagic.into())
+    {
+        Ok(s) => s,
+        Err(source) => {
+            out.push(Err(LogError::Mcap {
+                path: path.to_path_buf(),
+                source,
+            }));
+            return out;
+        }
+    };
+    for (index, msg) in stream.enumerate() {
+        let msg = match msg {
+            Ok(m) => m,
+            Err(source) => {
+                out.push(Err(LogError::Mcap {
+                    path: path.to_path_buf(),
+                    source,
+                }));
+                break;
+            }
+        };
+        let topic = msg.channel.topic.clone();
+        let bad = |message: String| LogError::Message {
+            path: path.to_path_buf(),
+            index,
+            topic: topic.clone(),
+            message,
+        };
+        match topic.as_str() {
+            SCAN_TOPIC => match decode_scan(&msg.data) {
+                Ok((seq, rec)) => {
+                    by_seq.insert(seq, out.len());
+                    out.push(Ok(rec));
+                }
+                Err(m) => out.push(Err(bad(m))),
+            },
+            TRUE_POSE_TOPIC | EST_POSE_TOPIC => {
+                let pose: PoseMsg = match serde_json::from_slice(&msg.data) {
+                    Ok(p) => p,
+                    Err(e) => {
+                        out.push(Err(bad(format!("not a goalseek pose: {e}"))));
+                        continue;
+                    }
+                };
+                let g = pose.goalseek;
+                let p = Pose2 {
+                    x_m: g.x_m,
+                    y_m: g.y_m,
+                    theta_rad: g.theta_rad,
+                };
+                match by_seq.get(&g.seq).and_then(|&i| out[i].as_mut().ok()) {
+                    Some(rec) if topic == TRUE_POSE_TOPIC => rec.true_pose = Some(p),
+                    Some(rec) => rec.pose = Some(p),
+                    None => out.push(Err(bad(format!("pose for unknown scan {}", g.seq)))),
+                }
+            }
+            _ => {} // other topics are not ours to read
+        }
+    }
+    let damaged = out.last().is_some_and(Result::is_err);
+    if !damaged && !bytes.ends_with(mcap::MAGIC) {
+        let scans = out.iter().filter(|r| r.is_ok()).count();
+        out.push(Err(LogError::Message {
+            path: path.to_path_buf(),
+            index: scans,
+            topic: SCAN_TOPIC.into(),
+            message: format!(
+                "the file ends without its MCAP footer (a recording cut short): {scans} whole scans read, {} bytes",
+                bytes.len()
+            ),
+        }));
+    }
+    out
+}
+
+fn decode_scan(data: &[u8]) -> Result<(u64, LogRecord), String> {
+    let m: LaserScanMsg =
+        serde_json::from_slice(data).map_err(|e| format!("not a goalseek laser scan: {e}"))?;
+    let x = m.goalseek;
+    let geometry = ScanGeometry::new(
+        x.first_bearing_rad,
+        x.increment_rad,
+        x.ray_count,
+        x.min_range_m,
+        x.max_range_m,
+    )
+    .map_err(|e| e.to_string())?;
+    if m.ranges.len() != x.ray_count || x.status.len() != x.ray_count {
+        return Err(format!(
+            "{} ranges and {} statuses for {} rays",
+            m.ranges.len(),
+            x.status.len(),
+            x.ray_count
+        ));
+    }
+    let mut status = Vec::with_capacity(x.ray_count);
+    let mut ranges_m = m.ranges;
+    for (i, &s) in x.status.iter().enumerate() {
+        status.push(match s {
+            STATUS_HIT => RayStatus::Hit,
+            STATUS_MAX_RANGE => RayStatus::MaxRange,
+            c if (0..=i32::from(u16::MAX)).contains(&c) => {
+                ranges_m[i] = f64::NAN;
+                RayStatus::Error(c as u16)
+            }
+            c => return Err(format!("ray {i} has unknown status {c}")),
+        });
+    }
+    let intensities = if m.intensities.is_empty() {
+        None
+    } else if m.intensities.len() == x.ray_count {
+        Some(m.intensities.iter().map(|&v| v as f32).collect())
+    } else {
+        return Err(format!(
+            "{} intensities for {} rays",
+            m.intensities.len(),
+            x.ray_count
+        ));
+    };
+    let scan = Scan {
+        ranges_m,
+        status,
+        intensities,
+        sensor_time_ms: x.sensor_time_ms,
+        host_time_s: x.host_time_s,
+    };
+    Ok((x.seq, LogRecord::new(x.seq as usize, geometry, scan)))
+}

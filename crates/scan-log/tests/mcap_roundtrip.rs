@@ -1,0 +1,223 @@
+//! goalseek MCAP recordings read back bit for bit; cut and dropped recordings.
+
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use scan_log::{LogOptions, LogSource, McapRecorder, partial_path, read_mcap};
+use scan_types::{LaserSource, Pose2, RayStatus, Scan, ScanGeometry};
+
+/// Random scans with awkward f64 values (no short decimal form), every ray status, intensities.
+fn scans(
+    n: usize,
+    geometry: &ScanGeometry,
+    seed: u64,
+) -> Vec<(Scan, Option<Pose2>, Option<Pose2>)> {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    (0..n)
+        .map(|k| {
+            let mut ranges = Vec::new();
+            let mut status = Vec::new();
+            for _ in 0..geometry.ray_count {
+                match rng.random_range(0..10) {
+                    0 => {
+                        ranges.push(geometry.max_range_m);
+                        status.push(RayStatus::MaxRange);
+                    }
+                    1 => {
+                        ranges.push(f64::NAN);
+                        status.push(RayStatus::Error(rng.random_range(0..20)));
+                    }
+                    _ => {
+                        ranges.push(rng.random::<f64>() * geometry.max_range_m);
+                        status.push(RayStatus::Hit);
+                    }
+                }
+            }
+            let scan = Scan {
+                ranges_m: ranges,
+                status,
+                intensities: (k % 2 == 0).then(|| {
+                    (0..geometry.ray_count)
+                        .map(|_| rng.random::<f32>() * 1e4)
+                        .collect()
+                }),
+                sensor_time_ms: (k % 3 != 0).then(|| rng.random::<u64>() >> 12),
+                host_time_s: 1.7e9 + rng.random::<f64>() * 1e3,
+            };
+            let pose = |rng: &mut ChaCha8Rng| {
+                Pose2::new(
+                    rng.random::<f64>() * 10.0 - 5.0,
+                    rng.random::<f64>() * 0.1,
+                    rng.random::<f64>() * 6.0 - 3.0,
+                )
+            };
+            let t = (k % 4 != 1).then(|| pose(&mut rng));
+            let e = (k % 4 != 2).then(|| pose(&mut rng));
+            (scan, t, e)
+        })
+        .collect()
+}
+
+fn same_scan(a: &Scan, b: &Scan) {
+    assert_eq!(a.status, b.status);
+    for (x, y) in a.ranges_m.iter().zip(&b.ranges_m) {
+        assert!(
+            x.to_bits() == y.to_bits() || (x.is_nan() && y.is_nan()),
+            "{x} vs {y}"
+        );
+    }
+    assert_eq!(
+        a.intensities
+            .as_ref()
+            .map(|v| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>()),
+        b.intensities
+            .as_ref()
+            .map(|v| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>())
+    );
+    assert_eq!(a.sensor_time_ms, b.sensor_time_ms);
+    assert_eq!(a.host_time_s.to_bits(), b.host_time_s.to_bits());
+}
+
+fn bits(p: Option<Pose2>) -> Option<[u64; 3]> {
+    p.map(|p| [p.x_m.to_bits(), p.y_m.to_bits(), p.theta_rad.to_bits()])
+}
+
+#[test]
+fn recording_reads_back_bit_for_bit() {
+    let g = ScanGeometry::new(
+        -2.0862 + 1e-13,
+        std::f64::consts::TAU / 1024.0,
+        37,
+        0.02,
+        5.6,
+    )
+    .unwrap();
+    let data = scans(40, &g, 7);
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("run.mcap");
+    let mut rec = McapRecorder::create(&path).unwrap();
+    assert!(partial_path(&path).exists() && !path.exists());
+    for (s, t, e) in &data {
+        rec.record_scan(&g, s, *t, *e).unwrap();
+    }
+    assert_eq!(rec.finish().unwrap(), 40);
+    assert!(path.exists() && !partial_path(&path).exists());
+
+    let back: Vec<_> = read_mcap(&path)
+        .unwrap()
+        .into_iter()
+        .collect::<Result<_, _>>()
+        .unwrap();
+    assert_eq!(back.len(), 40);
+    for (r, (s, t, e)) in back.iter().zip(&data) {
+        assert_eq!(r.geometry, g);
+        same_scan(&r.scan, s);
+        assert_eq!(bits(r.true_pose), bits(*t));
+        assert_eq!(bits(r.pose), bits(*e));
+    }
+
+    // And as a LaserSource.
+    let mut src = LogSource::open(&path, &LogOptions::default()).unwrap();
+    assert_eq!(*src.geometry(), g);
+    for (s, t, e) in &data {
+        same_scan(&src.next_scan().unwrap(), s);
+        assert_eq!(bits(src.true_pose()), bits(*t));
+        assert_eq!(bits(src.pose()), bits(*e));
+    }
+    assert!(src.next_scan().unwrap_err().is_end_of_log());
+}
+
+#[test]
+fn foxglove_fields_are_there() {
+    let g = ScanGeometry::centred(3, 1.0, 0.0, 4.0).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("fox.mcap");
+    let mut rec = McapRecorder::create(&path).unwrap();
+    let scan = Scan::from_ranges(&g, &[1.5, 4.0, f64::NAN], 12.25);
+    rec.record_scan(&g, &scan, None, Some(Pose2::new(1.0, 2.0, 0.5)))
+        .unwrap();
+    rec.finish().unwrap();
+    let bytes = std::fs::read(&path).unwrap();
+    let summary = mcap::Summary::read(&bytes).unwrap().unwrap();
+    let names: Vec<_> = summary
+        .schemas
+        .values()
+        .map(|s| (s.name.clone(), s.encoding.clone()))
+        .collect();
+    assert!(
+        names.contains(&("foxglove.LaserScan".into(), "jsonschema".into())),
+        "{names:?}"
+    );
+    assert!(
+        names.contains(&("foxglove.PoseInFrame".into(), "jsonschema".into())),
+        "{names:?}"
+    );
+    let msgs: Vec<_> = mcap::MessageStream::new(&bytes)
+        .unwrap()
+        .collect::<Result<_, _>>()
+        .unwrap();
+    assert_eq!(msgs.len(), 2);
+    assert_eq!(msgs[0].log_time, 12_250_000_000);
+    let v: serde_json::Value = serde_json::from_slice(&msgs[0].data).unwrap();
+    assert_eq!(v["timestamp"]["sec"], 12);
+    assert_eq!(v["timestamp"]["nsec"], 250_000_000);
+    assert_eq!(v["frame_id"], "world");
+    assert_eq!(v["start_angle"], -0.5);
+    assert_eq!(v["end_angle"], 0.5);
+    assert_eq!(v["ranges"], serde_json::json!([1.5, 4.0, 0.0]));
+    assert_eq!(v["pose"]["position"]["x"], 1.0);
+    assert!((v["pose"]["orientation"]["z"].as_f64().unwrap() - 0.25f64.sin()).abs() < 1e-15);
+    assert_eq!(msgs[1].channel.topic, "/pose/estimated");
+}
+
+#[test]
+fn dropped_recorder_still_leaves_a_readable_file() {
+    let g = ScanGeometry::centred(5, 1.0, 0.0, 4.0).unwrap();
+    let data = scans(6, &g, 3);
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("dropped.mcap");
+    {
+        let mut rec = McapRecorder::create(&path).unwrap();
+        for (s, t, e) in &data[..4] {
+            rec.record_scan(&g, s, *t, *e).unwrap();
+        }
+    }
+    let back: Vec<_> = read_mcap(&path)
+        .unwrap()
+        .into_iter()
+        .collect::<Result<_, _>>()
+        .unwrap();
+    assert_eq!(back.len(), 4);
+}
+
+#[test]
+fn a_cut_recording_gives_its_scans_then_an_error() {
+    let g = ScanGeometry::centred(5, 1.0, 0.0, 4.0).unwrap();
+    let data = scans(10, &g, 5);
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("whole.mcap");
+    let mut rec = McapRecorder::create(&path).unwrap();
+    for (s, t, e) in &data {
+        rec.record_scan(&g, s, *t, *e).unwrap();
+    }
+    rec.finish().unwrap();
+    // Simulate a crash: a file cut in the data section, as `<name>.partial` would be.
+    let bytes = std::fs::read(&path).unwrap();
+    let cut_path = dir.path().join("crash.mcap.partial");
+    // Cut at 60 % of the data: well inside the chunks, before the summary.
+    std::fs::write(&cut_path, &bytes[..bytes.len() * 6 / 10]).unwrap();
+    let items = read_mcap(&cut_path).unwrap();
+    let ok: Vec<_> = items.iter().filter_map(|r| r.as_ref().ok()).collect();
+    assert!(ok.len() >= 3 && ok.len() < 10, "{} scans", ok.len());
+    for (r, (s, _, _)) in ok.iter().zip(&data) {
+        same_scan(&r.scan, s);
+    }
+    let err = items.last().unwrap().as_ref().unwrap_err().to_string();
+    assert!(err.contains("crash.mcap.partial"), "{err}");
+    // The source reads the whole scans and counts the damage.
+    let mut src = LogSource::open(&cut_path, &LogOptions::default()).unwrap();
+    let mut n = 0;
+    while src.next_scan().is_ok() {
+        n += 1;
+    }
+    assert_eq!((n, src.skipped()), (ok.len(), 1));
+}
