@@ -1,0 +1,590 @@
+//! Landmark detection: max-range jumps (the paper), occlusion edges and corners, with
+//! stability flags.
+
+use scan_types::{RayStatus, RobotPoint, Scan, ScanGeometry};
+
+use crate::LandmarksError;
+
+/// What kind of feature a landmark is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum LandmarkKind {
+    /// The paper's landmark: a hit next to a max-range ray (`x` in A, `x +- n` not in A).
+    MaxRangeJump,
+    /// The nearer side of a range jump between two hits (an object's occluding edge).
+    OcclusionEdge,
+    /// Two straight arms of one surface meeting at an angle.
+    Corner,
+}
+
+/// On which side of an edge landmark (in ray index order) the open or farther space lies.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum OpenSide {
+    /// Toward lower ray indices (clockwise, to the right of the edge).
+    Lower,
+    /// Toward higher ray indices (counter-clockwise, to the left of the edge).
+    Higher,
+    /// Both neighbours are open: a lone hit.
+    Both,
+}
+
+/// A landmark found in one scan, in the robot frame of that scan.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Landmark {
+    /// Index of the ray that sees the landmark.
+    pub index: usize,
+    /// Distance from the robot centre, metres.
+    pub range_m: f64,
+    /// Bearing from the heading (central ray), radians.
+    pub bearing_rad: f64,
+    /// What kind of feature it is.
+    pub kind: LandmarkKind,
+    /// Where the open (or farther) space lies, for edges; `None` for corners.
+    pub open_side: Option<OpenSide>,
+    /// The hit lies within `range_limit_margin_m` of the maximum range.
+    pub near_range_limit: bool,
+    /// The surface extrapolated one ray into the gap reaches the far side: a wall running out
+    /// of range or seen at a grazing angle, not the end of an object.
+    pub surface_continues: bool,
+    /// Part of the landmark's own surface lies between it and the path ahead: the side ray
+    /// will probably not see it.
+    pub hidden_at_side: bool,
+    /// Hits on the landmark's surface within `arm_m` (including the landmark ray).
+    pub support_rays: usize,
+    /// Stability score in (0, 1]: 1 for a clean feature, lower for each flag raised.
+    pub score: f64,
+}
+
+impl Landmark {
+    /// The landmark point in the robot frame.
+    pub fn robot_point(&self) -> RobotPoint {
+        RobotPoint::new(
+            self.range_m * self.bearing_rad.cos(),
+            self.range_m * self.bearing_rad.sin(),
+        )
+    }
+
+    /// True when no stability flag is raised.
+    pub fn is_stable(&self) -> bool {
+        !(self.near_range_limit || self.surface_continues || self.hidden_at_side)
+    }
+}
+
+/// Every rule of landmark detection; see `docs/landmarks.md`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DetectParams {
+    /// The paper's `n`: ray `x` in A and ray `x + n` or `x - n` a hit makes a landmark.
+    pub neighbour_n: usize,
+    /// Detect the paper's max-range jumps.
+    pub max_range_jumps: bool,
+    /// Detect occlusion edges (range jumps between two hits).
+    pub occlusion_edges: bool,
+    /// Smallest range difference between neighbouring hits that is a jump, metres.
+    pub occlusion_jump_m: f64,
+    /// Detect corners.
+    pub corners: bool,
+    /// Length of surface used on each side of a feature (support, line fits), metres.
+    pub arm_m: f64,
+    /// Smallest turn between the two arms of a corner (0 = straight wall), radians.
+    pub corner_min_angle_rad: f64,
+    /// Largest RMS distance of an arm's hits from its fitted line, metres.
+    pub corner_max_residual_m: f64,
+    /// Fewest hits on each arm of a corner, besides the corner ray.
+    pub corner_min_arm_rays: usize,
+    /// Place a corner where its two fitted arms intersect instead of at the corner ray's hit.
+    pub corner_refine: bool,
+    /// A hit this close to the maximum range is flagged `near_range_limit`, metres.
+    pub range_limit_margin_m: f64,
+    /// Drop landmarks flagged `near_range_limit`.
+    pub reject_near_range_limit: bool,
+    /// Drop edges whose surface continues past them (`surface_continues`).
+    pub reject_surface_continues: bool,
+    /// Drop landmarks flagged `hidden_at_side`.
+    pub reject_hidden_at_side: bool,
+    /// Drop landmarks with fewer supporting hits than this (1 keeps a lone hit).
+    pub min_support_rays: usize,
+    /// Invalid (error) rays skipped between two valid rays; a longer gap splits the scan.
+    pub max_skipped_errors: usize,
+}
+
+impl Default for DetectParams {
+    /// goalseek's defaults: all kinds, range-limit and continuing-surface edges rejected.
+    fn default() -> Self {
+        Self {
+            neighbour_n: 1,
+            max_range_jumps: true,
+            occlusion_edges: true,
+            occlusion_jump_m: 0.3,
+            corners: true,
+            arm_m: 0.2,
+            corner_min_angle_rad: 40f64.to_radians(),
+            corner_max_residual_m: 0.02,
+            corner_min_arm_rays: 3,
+            corner_refine: true,
+            range_limit_margin_m: 0.1,
+            reject_near_range_limit: true,
+            reject_surface_continues: true,
+            reject_hidden_at_side: false,
+            min_support_rays: 2,
+            max_skipped_errors: 3,
+        }
+    }
+}
+
+impl DetectParams {
+    /// The paper as written: max-range jumps with `n = 1`, nothing flagged away.
+    pub fn paper() -> Self {
+        Self {
+            neighbour_n: 1,
+            max_range_jumps: true,
+            occlusion_edges: false,
+            corners: false,
+            range_limit_margin_m: 0.0,
+            reject_near_range_limit: false,
+            reject_surface_continues: false,
+            reject_hidden_at_side: false,
+            min_support_rays: 1,
+            ..Self::default()
+        }
+    }
+
+    /// Every kind detected and nothing rejected (flags still set): what a tracker
+    /// re-identifies against.
+    pub fn permissive(&self) -> Self {
+        Self {
+            max_range_jumps: true,
+            occlusion_edges: true,
+            corners: true,
+            reject_near_range_limit: false,
+            reject_surface_continues: false,
+            reject_hidden_at_side: false,
+            min_support_rays: 1,
+            ..*self
+        }
+    }
+
+    /// Checks every field.
+    pub fn validate(&self) -> Result<(), LandmarksError> {
+        let bad = |field, value, why| Err(LandmarksError::InvalidParam { field, value, why });
+        if self.neighbour_n == 0 {
+            return bad("neighbour_n", 0.0, "must be at least 1");
+        }
+        let positive = [
+            ("occlusion_jump_m", self.occlusion_jump_m),
+            ("arm_m", self.arm_m),
+            ("corner_max_residual_m", self.corner_max_residual_m),
+        ];
+        for (field, v) in positive {
+            if !(v.is_finite() && v > 0.0) {
+                return bad(field, v, "must be finite and > 0");
+            }
+        }
+        if !(self.range_limit_margin_m.is_finite() && self.range_limit_margin_m >= 0.0) {
+            return bad(
+                "range_limit_margin_m",
+                self.range_limit_margin_m,
+                "must be finite and >= 0",
+            );
+        }
+        let a = self.corner_min_angle_rad;
+        if !(a.is_finite() && a > 0.0 && a < std::f64::consts::PI) {
+            return bad("corner_min_angle_rad", a, "must lie in (0, pi)");
+        }
+        Ok(())
+    }
+}
+
+/// One usable ray: its index and, for a hit, its range.
+#[derive(Debug, Clone, Copy)]
+struct Ray {
+    index: usize,
+    hit: Option<f64>,
+}
+
+/// Finds the landmarks of `scan`, sorted by ray index.
+///
+/// Error rays are never in A and never hits: they are skipped (up to `max_skipped_errors` in
+/// a row; a longer gap splits the scan). A scan whose length differs from the geometry's is
+/// read up to the shorter of the two.
+pub fn detect(geometry: &ScanGeometry, scan: &Scan, params: &DetectParams) -> Vec<Landmark> {
+    let mut out = Vec::new();
+    for segment in segments(geometry, scan, params.max_skipped_errors) {
+        let mut found = Vec::new();
+        if params.max_range_jumps {
+            jumps(geometry, &segment, params, &mut found);
+        }
+        if params.occlusion_edges {
+            occlusions(geometry, &segment, params, &mut found);
+        }
+        if params.corners {
+            corners(geometry, &segment, params, &mut found);
+        }
+        out.extend(found);
+    }
+    out.retain(|l| {
+        !(params.reject_near_range_limit && l.near_range_limit
+            || params.reject_surface_continues && l.surface_continues
+            || params.reject_hidden_at_side && l.hidden_at_side
+            || l.support_rays < params.min_support_rays)
+    });
+    out.sort_by_key(|l| l.index);
+    out.dedup_by_key(|l| l.index);
+    out
+}
+
+/// Runs of usable rays, split where more than `max_gap` error rays follow each other.
+fn segments(geometry: &ScanGeometry, scan: &Scan, max_gap: usize) -> Vec<Vec<Ray>> {
+    let n = geometry
+        .ray_count
+        .min(scan.ranges_m.len())
+        .min(scan.status.len());
+    let mut out = Vec::new();
+    let mut current: Vec<Ray> = Vec::new();
+    let mut gap = 0usize;
+    for i in 0..n {
+        let r = scan.ranges_m[i];
+        let ray = match scan.status[i] {
+            RayStatus::Hit if r.is_finite() && r > 0.0 => Ray {
+                index: i,
+                hit: Some(r),
+            },
+            RayStatus::MaxRange => Ray {
+                index: i,
+                hit: None,
+            },
+            _ => {
+                gap += 1;
+                if gap > max_gap && !current.is_empty() {
+                    out.push(std::mem::take(&mut current));
+                }
+                continue;
+            }
+        };
+        gap = 0;
+        current.push(ray);
+    }
+    if !current.is_empty() {
+        out.push(current);
+    }
+    out
+}
+
+/// The paper's rule on one segment.
+fn jumps(geometry: &ScanGeometry, seg: &[Ray], params: &DetectParams, out: &mut Vec<Landmark>) {
+    let n = params.neighbour_n as isize;
+    let len = seg.len() as isize;
+    // Edge position in the segment -> open sides seen.
+    let mut edges: Vec<(usize, bool, bool)> = Vec::new(); // (pos, open below, open above)
+    for p in 0..len {
+        if seg[p as usize].hit.is_some() {
+            continue;
+        }
+        for dir in [-1isize, 1] {
+            let q = p + dir * n;
+            if q < 0 || q >= len || seg[q as usize].hit.is_none() {
+                continue;
+            }
+            let mut j = p + dir;
+            while seg[j as usize].hit.is_none() {
+                j += dir;
+            }
+            let j = j as usize;
+            // Open space lies toward p: below j when dir = +1.
+            match edges.iter_mut().find(|e| e.0 == j) {
+                Some(e) => {
+                    e.1 |= dir > 0;
+                    e.2 |= dir < 0;
+                }
+                None => edges.push((j, dir > 0, dir < 0)),
+            }
+        }
+    }
+    for (j, below, above) in edges {
+        let side = match (below, above) {
+            (true, true) => OpenSide::Both,
+            (true, false) => OpenSide::Lower,
+            _ => OpenSide::Higher,
+        };
+        let limit = geometry.max_range_m;
+        out.push(edge_landmark(
+            geometry,
+            seg,
+            j,
+            side,
+            limit,
+            LandmarkKind::MaxRangeJump,
+            params,
+        ));
+    }
+}
+
+/// Occlusion edges on one segment: the nearer of two neighbouring hits far apart in range.
+fn occlusions(
+    geometry: &ScanGeometry,
+    seg: &[Ray],
+    params: &DetectParams,
+    out: &mut Vec<Landmark>,
+) {
+    for p in 0..seg.len().saturating_sub(1) {
+        let (Some(a), Some(b)) = (seg[p].hit, seg[p + 1].hit) else {
+            continue;
+        };
+        if (a - b).abs() <= params.occlusion_jump_m {
+            continue;
+        }
+        let (pos, side, far) = if a < b {
+            (p, OpenSide::Higher, b)
+        } else {
+            (p + 1, OpenSide::Lower, a)
+        };
+        out.push(edge_landmark(
+            geometry,
+            seg,
+            pos,
+            side,
+            far,
+            LandmarkKind::OcclusionEdge,
+            params,
+        ));
+    }
+}
+
+/// Hits continuing the surface from `pos` in direction `dir` (excluding `pos`), within
+/// `arm_m` of the hit at `pos` and without range jumps.
+fn arm(
+    geometry: &ScanGeometry,
+    seg: &[Ray],
+    pos: usize,
+    dir: isize,
+    params: &DetectParams,
+) -> Vec<RobotPoint> {
+    let mut pts = Vec::new();
+    let Some(r0) = seg[pos].hit else { return pts };
+    let origin = geometry.robot_point(seg[pos].index, r0);
+    let mut prev = r0;
+    let mut k = pos as isize + dir;
+    while k >= 0 && (k as usize) < seg.len() {
+        let Some(r) = seg[k as usize].hit else { break };
+        if (r - prev).abs() > params.occlusion_jump_m {
+            break;
+        }
+        let p = geometry.robot_point(seg[k as usize].index, r);
+        if p.distance_m(&origin) > params.arm_m {
+            break;
+        }
+        pts.push(p);
+        prev = r;
+        k += dir;
+    }
+    pts
+}
+
+/// Least-squares line through points: (centroid, unit direction, RMS residual).
+fn fit_line(points: &[RobotPoint]) -> Option<([f64; 2], [f64; 2], f64)> {
+    if points.len() < 2 {
+        return None;
+    }
+    let n = points.len() as f64;
+    let cx = points.iter().map(|p| p.x_m()).sum::<f64>() / n;
+    let cy = points.iter().map(|p| p.y_m()).sum::<f64>() / n;
+    let (mut sxx, mut syy, mut sxy) = (0.0, 0.0, 0.0);
+    for p in points {
+        let (dx, dy) = (p.x_m() - cx, p.y_m() - cy);
+        sxx += dx * dx;
+        syy += dy * dy;
+        sxy += dx * dy;
+    }
+    let angle = 0.5 * (2.0 * sxy).atan2(sxx - syy);
+    let d = [angle.cos(), angle.sin()];
+    let ss: f64 = points
+        .iter()
+        .map(|p| {
+            let (dx, dy) = (p.x_m() - cx, p.y_m() - cy);
+            let off = dx * d[1] - dy * d[0];
+            off * off
+        })
+        .sum();
+    Some(([cx, cy], d, (ss / n).sqrt()))
+}
+
+/// Range at which the ray at `bearing` meets the line (centroid c, direction d), if ahead.
+fn line_range_on_ray(c: [f64; 2], d: [f64; 2], bearing: f64) -> Option<f64> {
+    let u = [bearing.cos(), bearing.sin()];
+    let den = d[0] * u[1] - d[1] * u[0];
+    if den.abs() < 1e-12 {
+        return None;
+    }
+    let t = (d[0] * c[1] - d[1] * c[0]) / den;
+    (t > 0.0).then_some(t)
+}
+
+/// Builds an edge landmark at segment position `pos` with its stability flags.
+/// `far_range_m` is the range on the open side (the maximum range for a jump).
+fn edge_landmark(
+    geometry: &ScanGeometry,
+    seg: &[Ray],
+    pos: usize,
+    side: OpenSide,
+    far_range_m: f64,
+    kind: LandmarkKind,
+    params: &DetectParams,
+) -> Landmark {
+    let ray = seg[pos];
+    let range = ray.hit.unwrap_or(geometry.max_range_m);
+    let bearing = geometry.bearing_rad(ray.index);
+    // The surface lies away from the open side.
+    let (surface_dirs, open_dirs): (&[isize], &[isize]) = match side {
+        OpenSide::Lower => (&[1], &[-1]),
+        OpenSide::Higher => (&[-1], &[1]),
+        OpenSide::Both => (&[], &[-1, 1]),
+    };
+    let mut support = vec![geometry.robot_point(ray.index, range)];
+    for &d in surface_dirs {
+        support.extend(arm(geometry, seg, pos, d, params));
+    }
+    let near_range_limit = range >= geometry.max_range_m - params.range_limit_margin_m;
+    // Extrapolate the surface onto the open neighbour ray.
+    let mut surface_continues = false;
+    if let Some((c, d, _)) = fit_line(&support) {
+        for &od in open_dirs {
+            let q = pos as isize + od;
+            if q < 0 || q as usize >= seg.len() {
+                continue;
+            }
+            let b = geometry.bearing_rad(seg[q as usize].index);
+            let reach = line_range_on_ray(c, d, b);
+            let limit = far_range_m - params.range_limit_margin_m.max(0.02);
+            if reach.is_none_or(|t| t >= limit) {
+                surface_continues = true;
+            }
+        }
+    }
+    let l = geometry.robot_point(ray.index, range);
+    let tol = 0.05;
+    let hidden_at_side = support.iter().skip(1).any(|q| {
+        q.x_m() > l.x_m() - tol
+            && q.y_m().abs() < l.y_m().abs() - tol
+            && q.y_m().signum() == l.y_m().signum()
+    });
+    let support_rays = support.len();
+    let mut lm = Landmark {
+        index: ray.index,
+        range_m: range,
+        bearing_rad: bearing,
+        kind,
+        open_side: Some(side),
+        near_range_limit,
+        surface_continues,
+        hidden_at_side,
+        support_rays,
+        score: 1.0,
+    };
+    lm.score = score(&lm, params);
+    lm
+}
+
+/// Stability score: each raised flag multiplies it down.
+fn score(l: &Landmark, params: &DetectParams) -> f64 {
+    let mut s = 1.0;
+    if l.near_range_limit {
+        s *= 0.2;
+    }
+    if l.surface_continues {
+        s *= 0.2;
+    }
+    if l.hidden_at_side {
+        s *= 0.3;
+    }
+    if l.support_rays < params.min_support_rays.max(3) {
+        s *= 0.5;
+    }
+    s
+}
+
+/// Corners on one segment, one per bend (the sharpest candidate of a run).
+fn corners(geometry: &ScanGeometry, seg: &[Ray], params: &DetectParams, out: &mut Vec<Landmark>) {
+    // (pos, turn angle, refined point)
+    let mut cands: Vec<(usize, f64, RobotPoint)> = Vec::new();
+    for pos in 0..seg.len() {
+        let Some(r) = seg[pos].hit else { continue };
+        let p = geometry.robot_point(seg[pos].index, r);
+        let lo = arm(geometry, seg, pos, -1, params);
+        let hi = arm(geometry, seg, pos, 1, params);
+        let min_len = 0.5 * params.arm_m;
+        let long_enough = |a: &[RobotPoint]| {
+            a.len() >= params.corner_min_arm_rays
+                && a.last().is_some_and(|q| q.distance_m(&p) >= min_len)
+        };
+        if !long_enough(&lo) || !long_enough(&hi) {
+            continue;
+        }
+        let with_p = |a: &[RobotPoint]| {
+            let mut v = Vec::with_capacity(a.len() + 1);
+            v.push(p);
+            v.extend_from_slice(a);
+            v
+        };
+        let (Some((c1, d1, e1)), Some((c2, d2, e2))) =
+            (fit_line(&with_p(&lo)), fit_line(&with_p(&hi)))
+        else {
+            continue;
+        };
+        if e1 > params.corner_max_residual_m || e2 > params.corner_max_residual_m {
+            continue;
+        }
+        // Angle between the two lines (undirected), 0 = straight.
+        let dot = (d1[0] * d2[0] + d1[1] * d2[1]).abs().min(1.0);
+        let turn = dot.acos();
+        if turn < params.corner_min_angle_rad {
+            continue;
+        }
+        let refined = if params.corner_refine {
+            intersect(c1, d1, c2, d2).unwrap_or(p)
+        } else {
+            p
+        };
+        cands.push((pos, turn, refined));
+    }
+    // Keep the sharpest candidate of each run of neighbouring candidates.
+    let mut i = 0;
+    while i < cands.len() {
+        let mut j = i;
+        let mut best = i;
+        while j + 1 < cands.len() && cands[j + 1].0 == cands[j].0 + 1 {
+            j += 1;
+            if cands[j].1 > cands[best].1 {
+                best = j;
+            }
+        }
+        let (pos, _, pt) = cands[best];
+        let mut support = arm(geometry, seg, pos, -1, params).len()
+            + arm(geometry, seg, pos, 1, params).len()
+            + 1;
+        support = support.max(1);
+        let range = pt.range_m();
+        let mut lm = Landmark {
+            index: seg[pos].index,
+            range_m: range,
+            bearing_rad: pt.bearing_rad(),
+            kind: LandmarkKind::Corner,
+            open_side: None,
+            near_range_limit: range >= geometry.max_range_m - params.range_limit_margin_m,
+            surface_continues: false,
+            hidden_at_side: false,
+            support_rays: support,
+            score: 1.0,
+        };
+        lm.score = score(&lm, params);
+        out.push(lm);
+        i = j + 1;
+    }
+}
+
+/// Intersection of two lines given as (point, direction).
+fn intersect(c1: [f64; 2], d1: [f64; 2], c2: [f64; 2], d2: [f64; 2]) -> Option<RobotPoint> {
+    let den = d1[0] * d2[1] - d1[1] * d2[0];
+    if den.abs() < 1e-9 {
+        return None;
+    }
+    let t = ((c2[0] - c1[0]) * d2[1] - (c2[1] - c1[1]) * d2[0]) / den;
+    Some(RobotPoint::new(c1[0] + t * d1[0], c1[1] + t * d1[1]))
+}

@@ -1,0 +1,236 @@
+//! Heading after a rotation in place: the commanded angle (paper) or the angle measured by
+//! aligning the scans taken before and after the rotation.
+
+use scan_types::{RayStatus, Scan, ScanGeometry, normalize_angle_rad};
+
+/// Where the heading after a rotation comes from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub enum HeadingRule {
+    /// The paper: heading plus the commanded rotation alpha.
+    Commanded,
+    /// goalseek: heading plus the rotation measured from the scans (commanded if the
+    /// measurement is not confident).
+    #[default]
+    ScanMeasured,
+}
+
+/// The new heading under `rule`: `theta + measured` when the rule is `ScanMeasured` and a
+/// measurement exists, else `theta + commanded`.
+pub fn heading_after_rotation(
+    rule: HeadingRule,
+    theta_rad: f64,
+    commanded_rad: f64,
+    measured_rad: Option<f64>,
+) -> f64 {
+    let turn = match (rule, measured_rad) {
+        (HeadingRule::ScanMeasured, Some(m)) => m,
+        _ => commanded_rad,
+    };
+    normalize_angle_rad(theta_rad + turn)
+}
+
+/// Tuning of the scan alignment.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RotationParams {
+    /// Search the rotation within this of the commanded angle, radians.
+    pub search_rad: f64,
+    /// A range difference counts at most this much (robust to occlusions), metres.
+    pub clip_m: f64,
+    /// Fewest ray pairs (not both max range) that must overlap.
+    pub min_pairs: usize,
+    /// Largest RMS (clipped) range difference of the best alignment, metres.
+    pub max_rms_m: f64,
+    /// The cost three rays away from the best shift must exceed the best by this factor.
+    pub min_contrast: f64,
+}
+
+impl Default for RotationParams {
+    /// +-5 deg search, 0.3 m clip, 30 pairs, 0.12 m RMS, contrast 1.2.
+    fn default() -> Self {
+        Self {
+            search_rad: 5f64.to_radians(),
+            clip_m: 0.3,
+            min_pairs: 30,
+            max_rms_m: 0.12,
+            min_contrast: 1.2,
+        }
+    }
+}
+
+/// A measured rotation with its quality.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RotationEstimate {
+    /// The rotation, counter-clockwise positive, radians.
+    pub angle_rad: f64,
+    /// RMS (clipped) range difference at the best alignment, metres.
+    pub rms_m: f64,
+    /// Ray pairs used at the best alignment.
+    pub pairs: usize,
+}
+
+/// Measures the rotation in place between two scans: the shift (in rays, below one ray by
+/// interpolation) that best aligns `after` with `before`, searched within `search_rad` of
+/// `commanded_rad`. `None` when no confident match exists.
+///
+/// A rotation by alpha moves what ray `i + alpha / increment` saw before onto ray `i`.
+pub fn measure_rotation(
+    geometry: &ScanGeometry,
+    before: &Scan,
+    after: &Scan,
+    commanded_rad: f64,
+    search_rad: f64,
+) -> Option<f64> {
+    let params = RotationParams {
+        search_rad,
+        ..RotationParams::default()
+    };
+    measure_rotation_with(geometry, before, after, commanded_rad, &params).map(|e| e.angle_rad)
+}
+
+/// One ray's reading for alignment: a range, and whether it is max range.
+#[derive(Clone, Copy)]
+struct Reading {
+    range: f64,
+    open: bool,
+}
+
+fn readings(geometry: &ScanGeometry, scan: &Scan) -> Vec<Option<Reading>> {
+    let n = geometry
+        .ray_count
+        .min(scan.ranges_m.len())
+        .min(scan.status.len());
+    (0..n)
+        .map(|i| match scan.status[i] {
+            RayStatus::Hit if scan.ranges_m[i].is_finite() => Some(Reading {
+                range: scan.ranges_m[i],
+                open: false,
+            }),
+            RayStatus::MaxRange => Some(Reading {
+                range: geometry.max_range_m,
+                open: true,
+            }),
+            _ => None,
+        })
+        .collect()
+}
+
+/// Mean clipped squared difference and pair count at fractional shift `s` (rays).
+fn cost(before: &[Option<Reading>], after: &[Option<Reading>], s: f64, clip: f64) -> (f64, usize) {
+    let n = before.len();
+    let mut sum = 0.0;
+    let mut count = 0usize;
+    for (i, a) in after.iter().enumerate() {
+        let Some(a) = a else { continue };
+        let j = i as f64 + s;
+        if j < 0.0 || j > (n - 1) as f64 {
+            continue;
+        }
+        let j0 = j.floor() as usize;
+        let f = j - j0 as f64;
+        let j1 = (j0 + 1).min(n - 1);
+        let b = match (before[j0], before[j1]) {
+            (Some(b0), Some(b1)) => {
+                if b0.open == b1.open && (b0.range - b1.range).abs() < clip {
+                    Reading {
+                        range: b0.range + f * (b1.range - b0.range),
+                        open: b0.open,
+                    }
+                } else if f < 0.5 {
+                    b0
+                } else {
+                    b1
+                }
+            }
+            (Some(b0), None) if f < 0.5 => b0,
+            (None, Some(b1)) if f >= 0.5 => b1,
+            _ => continue,
+        };
+        if a.open && b.open {
+            continue;
+        }
+        let d = (a.range - b.range).abs().min(clip);
+        sum += d * d;
+        count += 1;
+    }
+    if count == 0 {
+        (f64::INFINITY, 0)
+    } else {
+        (sum / count as f64, count)
+    }
+}
+
+/// [`measure_rotation`] with every tuning knob, returning the fit quality too.
+pub fn measure_rotation_with(
+    geometry: &ScanGeometry,
+    before: &Scan,
+    after: &Scan,
+    commanded_rad: f64,
+    params: &RotationParams,
+) -> Option<RotationEstimate> {
+    let b = readings(geometry, before);
+    let a = readings(geometry, after);
+    if b.len() < 2 || a.is_empty() || !commanded_rad.is_finite() {
+        return None;
+    }
+    let inc = geometry.increment_rad;
+    let centre = commanded_rad / inc;
+    let half = (params.search_rad.abs() / inc.abs()).ceil() as i64;
+    let clip = params.clip_m;
+    let eval = |s: f64| {
+        let (c, k) = cost(&b, &a, s, clip);
+        if k >= params.min_pairs {
+            (c, k)
+        } else {
+            (f64::INFINITY, k)
+        }
+    };
+    // Integer search.
+    let base = centre.round() as i64;
+    let mut best = (f64::INFINITY, 0i64);
+    for k in -half..=half {
+        let (c, _) = eval((base + k) as f64);
+        if c < best.0 {
+            best = (c, base + k);
+        }
+    }
+    if !best.0.is_finite() {
+        return None;
+    }
+    let s0 = best.1 as f64;
+    // Contrast: the alignment must be distinctly better than three rays off.
+    let side = eval(s0 - 3.0).0.min(eval(s0 + 3.0).0);
+    if side.is_finite() && side < params.min_contrast * best.0 + 1e-9 {
+        return None;
+    }
+    // Sub-ray refinement on a fine grid, then a parabola through the best grid point.
+    let step = 0.05;
+    let mut fine = (f64::INFINITY, s0);
+    for k in -20..=20 {
+        let s = s0 + k as f64 * step;
+        let (c, _) = eval(s);
+        if c < fine.0 {
+            fine = (c, s);
+        }
+    }
+    let (cm, cp) = (eval(fine.1 - step).0, eval(fine.1 + step).0);
+    let mut s = fine.1;
+    let den = cm - 2.0 * fine.0 + cp;
+    if cm.is_finite() && cp.is_finite() && den > 1e-15 {
+        s += 0.5 * step * (cm - cp) / den;
+    }
+    let (c, pairs) = eval(s);
+    let (c, pairs) = if c.is_finite() {
+        (c, pairs)
+    } else {
+        (fine.0, eval(fine.1).1)
+    };
+    let rms = c.sqrt();
+    if rms > params.max_rms_m {
+        return None;
+    }
+    Some(RotationEstimate {
+        angle_rad: normalize_angle_rad(s * inc),
+        rms_m: rms,
+        pairs,
+    })
+}
