@@ -1,0 +1,60 @@
+//! The crate's error type.
+
+use std::path::PathBuf;
+
+/// Everything that can go wrong in the simulator: loading worlds, configuring sensors, moving.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum SimError {
+    /// A file could not be read or written.
+    #[error("{}: {source}", path.display())]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The underlying error.
+        #[source]
+        source: std::io::Error,
+    },
+    /// An image could not be decoded or encoded.
+    #[error("{}: image: {message}", path.display())]
+    Image {
+        /// The file.
+        path: PathBuf,
+        /// What the image library said.
+        message: String,
+    },
+    /// A world file has a bad line or field.
+    #[error("{}{}: {field}: {message}", path.display(), line.map(|l| format!(":{l}")).unwrap_or_default())]
+    Parse {
+        /// The file.
+        path: PathBuf,
+        /// 1-based line, when known.
+        line: Option<usize>,
+        /// The field (key) at fault.
+        field: String,
+        /// What is wrong with it.
+        message: String,
+    },
+    /// A world description is inconsistent (bad shape, bad size).
+    #[error("invalid world: {0}")]
+    InvalidWorld(String),
+    /// A sensor or noise parameter is out of its domain.
+    #[error("invalid {field}: {message}")]
+    InvalidConfig {
+        /// The parameter.
+        field: &'static str,
+        /// What it must satisfy.
+        message: String,
+    },
+    /// A motion command was not a finite number.
+    #[error("invalid motion command: {what} = {value}")]
+    InvalidMotion {
+        /// Which command.
+        what: &'static str,
+        /// Its value.
+        value: f64,
+    },
+    /// An unknown sensor preset name.
+    #[error("unknown sensor preset {0:?} (expected paper, urg-04lx or utm-30lx)")]
+    UnknownPreset(String),
+}
