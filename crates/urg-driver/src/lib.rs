@@ -1,4 +1,44 @@
-//! Hokuyo SCIP 2.0 driver: a pure codec, a driver generic over its transport that
-//! implements `LaserSource`, and an emulator of the sensor side for tests and `robot-app emulate`.
+//! Hokuyo SCIP 2.0 driver: a pure codec ([`codec`]), a command port generic over its
+//! transport ([`ScipPort`]), a connected sensor that implements `LaserSource` ([`Urg`],
+//! [`ReconnectingUrg`]) and an emulator of the sensor side ([`Emulator`], [`serve_pty`]).
 //!
-//! Status: under construction; see the issue tracker. Nothing here is finished yet.
+//! The driver owns its transport (`T: Read + Write`, given back by `into_inner`); opening a
+//! real port goes through [`Urg::open`] (the `serialport` crate). Ranges come out in metres:
+//! values below the sensor's DMIN are error codes, kept as `RayStatus::Error(code)`, except
+//! code 0 ("no return"), which is `RayStatus::MaxRange`.
+//!
+//! ```
+//! use scan_types::{LaserSource, RayStatus};
+//! use urg_driver::{AcquisitionMode, Emulator, Model, Urg, UrgConfig};
+//!
+//! let config = UrgConfig { mode: AcquisitionMode::Streaming, ..UrgConfig::default() };
+//! let mut urg = Urg::connect(Emulator::fixed(Model::Urg04lx), config).unwrap();
+//! assert_eq!(urg.params().model, "URG-04LX(Hokuyo Automatic Co.,Ltd.)");
+//! assert_eq!(urg.geometry().ray_count, 682);
+//! let a = urg.next_scan().unwrap();
+//! let b = urg.next_scan().unwrap();
+//! // One sensor period (100 ms) between streamed scans.
+//! assert_eq!(b.sensor_time_ms.unwrap() - a.sensor_time_ms.unwrap(), 100);
+//! assert_eq!(a.status[84], RayStatus::Error(7));
+//! ```
+
+pub mod codec;
+mod driver;
+pub mod emulator;
+mod error;
+mod info;
+pub mod port;
+pub mod time;
+
+pub use codec::{Command, DataKind, RawScan, ScanRequest, Status, StreamRequest, TimeCode};
+pub use driver::{
+    AcquisitionMode, Backoff, ReconnectingUrg, SerialTransport, Urg, UrgConfig,
+    connect_with_backoff, host_now_s, open_serial,
+};
+pub use emulator::{
+    Emulator, EmulatorControl, Fault, FixedSource, Model, Profile, PtyServer, SensorCore,
+    serve_pty, serve_pty_with,
+};
+pub use error::UrgError;
+pub use info::{SensorParams, StateInfo, VersionInfo};
+pub use port::{PortConfig, PortStats, ScipPort};

@@ -1,0 +1,446 @@
+//! `Urg`: a connected Hokuyo that produces scans (`LaserSource`), and `ReconnectingUrg`,
+//! which reopens the port with backoff when the device disappears.
+
+use std::io::{self, Read, Write};
+use std::ops::{Deref, DerefMut};
+use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
+
+use scan_types::{LaserSource, Scan, ScanGeometry};
+
+use crate::UrgError;
+use crate::codec::{DataKind, RawScan, ScanRequest, Status, StatusLine, StreamRequest};
+use crate::info::SensorParams;
+use crate::port::{PortConfig, ScipPort};
+use crate::time::{TimeSample, TimestampUnwrapper, median_offset_s};
+
+/// How `next_scan` gets its scans.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum AcquisitionMode {
+    /// One `GD`/`GS`/`GE` request per scan: every scan is taken on demand.
+    #[default]
+    Polled,
+    /// `MD`/`MS`/`ME` streaming until `QT`: scans arrive at the sensor's period.
+    Streaming,
+}
+
+/// How a [`Urg`] connects and acquires.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct UrgConfig {
+    /// Timeouts of the underlying port.
+    pub port: PortConfig,
+    /// Polled or streaming acquisition.
+    pub mode: AcquisitionMode,
+    /// Encoding of the scans (`Range3` for GD/MD).
+    pub kind: DataKind,
+    /// Steps merged into one value (1 = every step).
+    pub cluster: u8,
+    /// TM1 round trips for the host-time offset (0: stamp scans with the host receive time).
+    pub time_sync_rounds: usize,
+    /// Quiet time that ends the drain of stale bytes while connecting.
+    pub drain_quiet: Duration,
+    /// Consecutive bad replies (checksum, garbage) tolerated in one `next_scan`.
+    pub max_bad_replies: usize,
+}
+
+impl Default for UrgConfig {
+    fn default() -> Self {
+        UrgConfig {
+            port: PortConfig::default(),
+            mode: AcquisitionMode::Polled,
+            kind: DataKind::Range3,
+            cluster: 1,
+            time_sync_rounds: 10,
+            drain_quiet: Duration::from_millis(50),
+            max_bad_replies: 10,
+        }
+    }
+}
+
+/// Host wall-clock time, seconds since the Unix epoch.
+pub fn host_now_s() -> f64 {
+    SystemTime::now()
+        .duration_since(UNIX_EPOCH)
+        .map_or(0.0, |d| d.as_secs_f64())
+}
+
+/// A connected SCIP 2.0 sensor: its parameters, geometry and scan stream.
+///
+/// Derefs to [`ScipPort`] for every individual command.
+#[derive(Debug)]
+pub struct Urg<T> {
+    port: ScipPort<T>,
+    config: UrgConfig,
+    params: SensorParams,
+    request: ScanRequest,
+    geometry: ScanGeometry,
+    raw: RawScan,
+    unwrapper: TimestampUnwrapper,
+    offset_s: Option<f64>,
+}
+
+impl<T: Read + Write> Urg<T> {
+    /// Connects the way Hokuyo's own library does (`LF`, `QT`, switching a SCIP 1.1 sensor to
+    /// SCIP 2.0 and leaving time-adjust mode if needed), then reads `PP`, synchronises clocks
+    /// (`TM0`, N x `TM1`, `TM2`) and, for polled mode, switches the laser on (`BM`).
+    pub fn connect(io: T, config: UrgConfig) -> Result<Self, UrgError> {
+        let mut port = ScipPort::new(io, config.port);
+        port.write_raw(b"\n")?;
+        port.drain(config.drain_quiet)?;
+        let reply = port.transact(&crate::codec::Command::LaserOff, None)?;
+        match reply.status() {
+            StatusLine::Scip2(s) if s == Status::OK => {}
+            StatusLine::Scip1(_) => {
+                tracing::info!("sensor answers in SCIP 1.1: switching to SCIP 2.0");
+                port.switch_to_scip2()?;
+                port.drain(config.drain_quiet)?;
+                port.laser_off()?;
+            }
+            StatusLine::Scip2(s) if s == Status::UNDEFINED => {
+                tracing::info!("sensor is in time-adjust mode: leaving it");
+                port.time_adjust(false)?;
+                port.laser_off()?;
+            }
+            StatusLine::Scip2(s) => return Err(UrgError::from_status("QT", s)),
+        }
+        let params = port.parameters()?;
+        Self::with_params(port, config, params)
+    }
+
+    /// Builds the driver from a port whose sensor parameters are known (no `PP` is sent);
+    /// synchronises clocks and switches the laser on as [`Urg::connect`] does.
+    pub fn with_params(
+        port: ScipPort<T>,
+        config: UrgConfig,
+        params: SensorParams,
+    ) -> Result<Self, UrgError> {
+        let request = ScanRequest {
+            cluster: config.cluster.max(1),
+            ..params.full_request(config.kind)
+        };
+        let geometry = params.geometry_for(&request)?;
+        let mut urg = Urg {
+            port,
+            config,
+            params,
+            request,
+            geometry,
+            raw: RawScan::with_capacity(request.value_count()),
+            unwrapper: TimestampUnwrapper::default(),
+            offset_s: None,
+        };
+        if config.time_sync_rounds > 0 {
+            urg.sync_time(config.time_sync_rounds)?;
+        }
+        if config.mode == AcquisitionMode::Polled {
+            urg.port.laser_on()?;
+        }
+        Ok(urg)
+    }
+
+    /// Gives the transport back (the sensor may still be streaming: call `stop` first).
+    pub fn into_inner(self) -> T {
+        self.port.into_inner()
+    }
+
+    /// The sensor's parameters (PP).
+    pub fn params(&self) -> &SensorParams {
+        &self.params
+    }
+
+    /// The request each scan is taken with.
+    pub fn request(&self) -> &ScanRequest {
+        &self.request
+    }
+
+    /// The configuration in use.
+    pub fn config(&self) -> &UrgConfig {
+        &self.config
+    }
+
+    /// Host time minus sensor time, seconds, from the last synchronisation.
+    pub fn time_offset_s(&self) -> Option<f64> {
+        self.offset_s
+    }
+
+    /// Estimates the host-time offset from `rounds` TM1 round trips (median), in time-adjust mode.
+    pub fn sync_time(&mut self, rounds: usize) -> Result<f64, UrgError> {
+        if self.port.is_streaming() {
+            self.port.stop_stream()?;
+        }
+        self.port.time_adjust(true)?;
+        let mut samples = Vec::with_capacity(rounds);
+        let mut result = Ok(());
+        for _ in 0..rounds.max(1) {
+            let host_send_s = host_now_s();
+            match self.port.read_time() {
+                Ok(sensor_ms) => samples.push(TimeSample {
+                    host_send_s,
+                    host_recv_s: host_now_s(),
+                    sensor_ms,
+                }),
+                Err(e) => {
+                    result = Err(e);
+                    break;
+                }
+            }
+        }
+        let leave = self.port.time_adjust(false);
+        result?;
+        leave?;
+        let offset = median_offset_s(&samples).ok_or_else(|| UrgError::Timeout {
+            command: "TM1".into(),
+            waited_ms: 0,
+        })?;
+        // Seed the unwrapper with the timer as it was during synchronisation.
+        self.unwrapper.reset();
+        if let Some(last) = samples.last() {
+            self.unwrapper.unwrap(last.sensor_ms);
+        }
+        self.offset_s = Some(offset);
+        if self.config.mode == AcquisitionMode::Polled {
+            self.port.laser_on()?;
+        }
+        tracing::debug!(offset, samples = samples.len(), "sensor clock synchronised");
+        Ok(offset)
+    }
+
+    /// Stops streaming (`QT`) if a stream is running.
+    pub fn stop(&mut self) -> Result<(), UrgError> {
+        if self.port.is_streaming() {
+            self.port.stop_stream()?;
+        }
+        Ok(())
+    }
+
+    /// The next scan in sensor units, decoded into a buffer the driver reuses.
+    ///
+    /// Scans with a checksum error or a malformed reply are dropped and counted (see
+    /// [`ScipPort::stats`]); after `max_bad_replies` in a row the last error is returned.
+    pub fn next_raw(&mut self) -> Result<&RawScan, UrgError> {
+        let mut bad = 0usize;
+        loop {
+            let res = match self.config.mode {
+                AcquisitionMode::Polled => self.port.get_scan(&self.request, &mut self.raw),
+                AcquisitionMode::Streaming => {
+                    if !self.port.is_streaming() {
+                        self.port.start_stream(&StreamRequest {
+                            scan: self.request,
+                            skip: 0,
+                            count: 0,
+                        })?;
+                    }
+                    self.port.read_stream_scan(self.request.kind, &mut self.raw)
+                }
+            };
+            match res {
+                Ok(()) => break,
+                Err(e) if e.is_reply_error() && bad < self.config.max_bad_replies => {
+                    tracing::warn!("dropping one scan: {e}");
+                    bad += 1;
+                }
+                Err(e) => return Err(e),
+            }
+        }
+        if self.raw.ranges_mm.len() != self.geometry.ray_count {
+            return Err(UrgError::Framing {
+                what: format!(
+                    "scan has {} values, the request asks for {}",
+                    self.raw.ranges_mm.len(),
+                    self.geometry.ray_count
+                ),
+                offset: 0,
+            });
+        }
+        Ok(&self.raw)
+    }
+}
+
+impl<T> Deref for Urg<T> {
+    type Target = ScipPort<T>;
+    fn deref(&self) -> &ScipPort<T> {
+        &self.port
+    }
+}
+
+impl<T> DerefMut for Urg<T> {
+    fn deref_mut(&mut self) -> &mut ScipPort<T> {
+        &mut self.port
+    }
+}
+
+impl<T: Read + Write> LaserSource for Urg<T> {
+    type Error = UrgError;
+
+    fn geometry(&self) -> &ScanGeometry {
+        &self.geometry
+    }
+
+    fn next_scan(&mut self) -> Result<Scan, UrgError> {
+        let recv_s = host_now_s();
+        self.next_raw()?;
+        let sensor_ms = self.unwrapper.unwrap(self.raw.timestamp_ms);
+        let host = match self.offset_s {
+            Some(off) => off + sensor_ms as f64 / 1000.0,
+            None => recv_s,
+        };
+        Ok(self.params.to_scan(&self.raw, Some(sensor_ms), host))
+    }
+}
+
+/// Reconnection delays: `initial`, multiplied by `factor` after each failure, capped at `max`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Backoff {
+    /// First delay.
+    pub initial: Duration,
+    /// Longest delay.
+    pub max: Duration,
+    /// Growth per failed attempt.
+    pub factor: f64,
+    /// Give up after this many attempts (`None`: never).
+    pub max_attempts: Option<u32>,
+}
+
+impl Default for Backoff {
+    fn default() -> Self {
+        Backoff {
+            initial: Duration::from_millis(100),
+            max: Duration::from_secs(5),
+            factor: 2.0,
+            max_attempts: None,
+        }
+    }
+}
+
+impl Backoff {
+    /// The delay before attempt `n` (0-based).
+    pub fn delay(&self, attempt: u32) -> Duration {
+        let f = self.factor.max(1.0).powi(attempt.min(64) as i32);
+        self.initial.mul_f64(f.min(1e9)).min(self.max)
+    }
+}
+
+/// Opens and connects with `open`, retrying with `backoff` while it fails.
+pub fn connect_with_backoff<T, F>(
+    open: &mut F,
+    config: &UrgConfig,
+    backoff: &Backoff,
+) -> Result<Urg<T>, UrgError>
+where
+    T: Read + Write,
+    F: FnMut() -> io::Result<T>,
+{
+    let mut attempt = 0u32;
+    loop {
+        let err = match open() {
+            Ok(io) => match Urg::connect(io, *config) {
+                Ok(u) => return Ok(u),
+                Err(e) => e,
+            },
+            Err(e) => UrgError::Disconnected(format!("cannot open the port: {e}")),
+        };
+        if backoff.max_attempts.is_some_and(|m| attempt + 1 >= m) {
+            return Err(err);
+        }
+        let d = backoff.delay(attempt);
+        tracing::warn!(
+            "connect attempt {} failed ({err}); retrying in {d:?}",
+            attempt + 1
+        );
+        std::thread::sleep(d);
+        attempt += 1;
+    }
+}
+
+/// A `LaserSource` that survives unplugging: on `Disconnected` it reopens the port with
+/// backoff, checks the parameters are unchanged and resumes the stream.
+pub struct ReconnectingUrg<T, F> {
+    open: F,
+    config: UrgConfig,
+    backoff: Backoff,
+    urg: Option<Urg<T>>,
+    params: SensorParams,
+    geometry: ScanGeometry,
+    reconnects: u32,
+}
+
+impl<T: Read + Write, F: FnMut() -> io::Result<T>> ReconnectingUrg<T, F> {
+    /// Opens and connects (with backoff).
+    pub fn new(mut open: F, config: UrgConfig, backoff: Backoff) -> Result<Self, UrgError> {
+        let urg = connect_with_backoff(&mut open, &config, &backoff)?;
+        Ok(ReconnectingUrg {
+            params: urg.params().clone(),
+            geometry: *LaserSource::geometry(&urg),
+            urg: Some(urg),
+            open,
+            config,
+            backoff,
+            reconnects: 0,
+        })
+    }
+
+    /// How many times the device was reconnected.
+    pub fn reconnects(&self) -> u32 {
+        self.reconnects
+    }
+
+    /// The connected driver, if any.
+    pub fn urg_mut(&mut self) -> Option<&mut Urg<T>> {
+        self.urg.as_mut()
+    }
+}
+
+impl<T: Read + Write, F: FnMut() -> io::Result<T>> LaserSource for ReconnectingUrg<T, F> {
+    type Error = UrgError;
+
+    fn geometry(&self) -> &ScanGeometry {
+        &self.geometry
+    }
+
+    fn next_scan(&mut self) -> Result<Scan, UrgError> {
+        loop {
+            if self.urg.is_none() {
+                let started = Instant::now();
+                let urg = connect_with_backoff(&mut self.open, &self.config, &self.backoff)?;
+                if urg.params() != &self.params {
+                    return Err(UrgError::ParametersChanged(format!(
+                        "{:?} became {:?}",
+                        self.params,
+                        urg.params()
+                    )));
+                }
+                self.reconnects += 1;
+                tracing::info!("sensor reconnected after {:?}", started.elapsed());
+                self.urg = Some(urg);
+            }
+            let urg = self.urg.as_mut().expect("connected above");
+            match urg.next_scan() {
+                Err(UrgError::Disconnected(why)) => {
+                    tracing::warn!("sensor disconnected ({why}); reconnecting");
+                    self.urg = None;
+                }
+                other => return other,
+            }
+        }
+    }
+}
+
+/// A serial port opened through the `serialport` crate.
+pub type SerialTransport = Box<dyn serialport::SerialPort>;
+
+/// Opens a serial device (USB CDC-ACM or pseudo-terminal) for SCIP: 115200 8N1 (the rate
+/// does not matter over USB), with a short read timeout so the driver's own timeouts rule.
+pub fn open_serial(path: &str) -> io::Result<SerialTransport> {
+    serialport::new(path, 115_200)
+        .timeout(Duration::from_millis(20))
+        .open()
+        .map_err(io::Error::from)
+}
+
+impl Urg<SerialTransport> {
+    /// Opens the serial device at `path` and connects.
+    pub fn open(path: &str, config: UrgConfig) -> Result<Self, UrgError> {
+        let io = open_serial(path)
+            .map_err(|e| UrgError::Disconnected(format!("cannot open {path}: {e}")))?;
+        Urg::connect(io, config)
+    }
+}
