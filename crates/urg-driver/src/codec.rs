@@ -746,7 +746,7 @@ pub fn decode_scan_body(
         });
     }
     let w = kind.chars_per_step();
-    if out.payload.len() % w != 0 {
+    if !out.payload.len().is_multiple_of(w) {
         return Err(UrgError::Framing {
             what: format!(
                 "{} data characters is not a whole number of {w}-character values",

@@ -383,10 +383,10 @@ impl<S: LaserSource> SensorCore<S> {
 
     fn begin_reply(&mut self) {
         let mut c = self.control.lock();
-        if let Some(pos) = c.faults.iter().position(|f| matches!(f, Fault::Garbage(_))) {
-            if let Some(Fault::Garbage(g)) = c.faults.remove(pos) {
-                self.out.extend(g);
-            }
+        if let Some(pos) = c.faults.iter().position(|f| matches!(f, Fault::Garbage(_)))
+            && let Some(Fault::Garbage(g)) = c.faults.remove(pos)
+        {
+            self.out.extend(g);
         }
     }
 
@@ -715,6 +715,26 @@ pub struct Emulator<S> {
     clock: Clock,
     read_timeout: Duration,
     max_chunk: usize,
+}
+
+impl<S> std::fmt::Debug for Emulator<S> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Emulator")
+            .field("model", &self.core.profile.params.model)
+            .field("clock", &self.clock)
+            .field("pending", &self.core.out.len())
+            .finish_non_exhaustive()
+    }
+}
+
+impl<S> std::fmt::Debug for SensorCore<S> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("SensorCore")
+            .field("model", &self.profile.params.model)
+            .field("laser_on", &self.laser_on)
+            .field("streaming", &self.stream.is_some())
+            .finish_non_exhaustive()
+    }
 }
 
 impl Emulator<FixedSource> {
