@@ -19,13 +19,19 @@
 //! assert_eq!(truth.scans_taken(), 1);
 //! ```
 
+mod description;
 mod error;
+mod generate;
+mod mapserver;
 mod sensor;
 mod sim;
 mod stage;
 mod world;
 
+pub use description::{WorldDescription, read_description};
 pub use error::SimError;
+pub use generate::{GenParams, generate_world};
+pub use mapserver::{MapMode, MapServerYaml, parse_map_yaml};
 pub use sensor::{
     DROPOUT_CODE, LaserNoise, SensorPreset, SigmaCombine, TOO_NEAR_CODE, cast_scan, true_scan,
 };

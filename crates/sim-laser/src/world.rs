@@ -75,7 +75,7 @@ impl Obstacle {
         }
     }
 
-    fn validate(&self, index: usize) -> Result<(), SimError> {
+    pub(crate) fn validate(&self, index: usize) -> Result<(), SimError> {
         let bad = |m: &str| Err(SimError::InvalidWorld(format!("obstacle {index}: {m}")));
         let finite = |p: &[f64; 2]| p[0].is_finite() && p[1].is_finite();
         match self {

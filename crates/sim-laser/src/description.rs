@@ -1,0 +1,483 @@
+//! The native TOML world format and `WorldDescription`, the editable form of a vector world.
+
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+use toml::Spanned;
+
+use crate::stage::bitmap_from_image;
+use crate::world::{Bitmap, Obstacle, WorldParts};
+use crate::{SimError, World};
+
+/// A vector world with its scenario: what the generator produces and the TOML format stores.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct WorldDescription {
+    /// A name for messages.
+    pub name: String,
+    /// The rectangle the world occupies (lower-left, upper-right), if given.
+    pub bounds: Option<([f64; 2], [f64; 2])>,
+    /// With `bounds`: enclose them with four zero-thickness walls.
+    pub boundary: bool,
+    /// The obstacles.
+    pub obstacles: Vec<Obstacle>,
+    /// Suggested start pose `(x_m, y_m, theta_rad)`.
+    pub start: Option<[f64; 3]>,
+    /// Suggested target `(x_m, y_m)`.
+    pub target: Option<[f64; 2]>,
+}
+
+impl WorldDescription {
+    /// Builds the world (grid cell size chosen from the extent).
+    pub fn to_world(&self) -> Result<World, SimError> {
+        World::from_parts(WorldParts {
+            name: self.name.clone(),
+            bitmap: None,
+            obstacles: self.all_obstacles(),
+            cell_size_m: None,
+        })
+    }
+
+    /// The obstacles plus the boundary walls, if any.
+    pub fn all_obstacles(&self) -> Vec<Obstacle> {
+        let mut v = self.obstacles.clone();
+        if let (true, Some((l, h))) = (self.boundary, self.bounds) {
+            let c = [[l[0], l[1]], [h[0], l[1]], [h[0], h[1]], [l[0], h[1]]];
+            for i in 0..4 {
+                v.push(Obstacle::Segment {
+                    a: c[i],
+                    b: c[(i + 1) % 4],
+                });
+            }
+        }
+        v
+    }
+
+    /// The TOML text of this description (the format `World::load` reads).
+    pub fn to_toml(&self) -> String {
+        let mut file = TomlWorld {
+            name: Some(self.name.clone()),
+            cell_size_m: None,
+            bounds: self.bounds.map(|(min, max)| {
+                Spanned::new(
+                    0..0,
+                    TomlBounds {
+                        min,
+                        max,
+                        boundary: self.boundary,
+                    },
+                )
+            }),
+            start: self
+                .start
+                .map(|[x, y, t]| Spanned::new(0..0, [x, y, t.to_degrees()])),
+            target: self.target,
+            bitmap: None,
+            r#box: Vec::new(),
+            circle: Vec::new(),
+            polygon: Vec::new(),
+            wall: Vec::new(),
+        };
+        for o in &self.obstacles {
+            match o {
+                Obstacle::Box {
+                    centre,
+                    size,
+                    angle_rad,
+                } => file.r#box.push(Spanned::new(
+                    0..0,
+                    TomlBox {
+                        centre: *centre,
+                        size: *size,
+                        angle_deg: angle_rad.to_degrees(),
+                    },
+                )),
+                Obstacle::Circle { centre, radius } => file.circle.push(Spanned::new(
+                    0..0,
+                    TomlCircle {
+                        centre: *centre,
+                        radius: *radius,
+                    },
+                )),
+                Obstacle::Polygon { points } => file.polygon.push(Spanned::new(
+                    0..0,
+                    TomlPolygon {
+                        points: points.clone(),
+                    },
+                )),
+                Obstacle::Segment { a, b } => file.wall.push(Spanned::new(
+                    0..0,
+                    TomlWall {
+                        from: *a,
+                        to: *b,
+                        thickness: 0.0,
+                    },
+                )),
+            }
+        }
+        let body = toml::to_string(&file).unwrap_or_default();
+        format!("# goalseek world (TOML, see docs/sim-laser.md)\n{body}")
+    }
+
+    /// Writes the TOML form atomically.
+    pub fn write_toml(&self, path: &Path) -> Result<(), SimError> {
+        write_atomic(path, self.to_toml().as_bytes())
+    }
+
+    /// Rasterises the world at `resolution_m` over its bounds (or obstacle extent) and writes
+    /// a ROS map_server pair: `path` (YAML) and the PGM beside it (same stem), atomically.
+    pub fn write_map_server(&self, yaml_path: &Path, resolution_m: f64) -> Result<(), SimError> {
+        let (bm, lo) = self.rasterise(resolution_m)?;
+        let pgm_path = yaml_path.with_extension("pgm");
+        let img = bitmap_to_gray(&bm);
+        let mut pgm = format!("P5\n{} {}\n255\n", bm.width, bm.height).into_bytes();
+        pgm.extend_from_slice(img.as_raw());
+        write_atomic(&pgm_path, &pgm)?;
+        let image_name = pgm_path
+            .file_name()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        let yaml = format!(
+            "image: {image_name}\nmode: trinary\nresolution: {resolution_m}\norigin: [{}, {}, 0.0]\nnegate: 0\noccupied_thresh: 0.65\nfree_thresh: 0.25\n",
+            lo[0], lo[1]
+        );
+        write_atomic(yaml_path, yaml.as_bytes())
+    }
+
+    /// Rasterises the world at `resolution_m` per pixel and writes a Stage-style PNG atomically
+    /// (dark = obstacle). Load it back with `World::load_stage_bitmap` and the bounds' size.
+    pub fn write_png(&self, path: &Path, resolution_m: f64) -> Result<(), SimError> {
+        let (bm, _) = self.rasterise(resolution_m)?;
+        let img = bitmap_to_gray(&bm);
+        let mut bytes = Vec::new();
+        img.write_to(
+            &mut std::io::Cursor::new(&mut bytes),
+            image::ImageFormat::Png,
+        )
+        .map_err(|e| SimError::Image {
+            path: path.to_path_buf(),
+            message: e.to_string(),
+        })?;
+        write_atomic(path, &bytes)
+    }
+
+    fn rasterise(&self, resolution_m: f64) -> Result<(Bitmap, [f64; 2]), SimError> {
+        if !(resolution_m.is_finite() && resolution_m > 0.0) {
+            return Err(SimError::InvalidConfig {
+                field: "resolution_m",
+                message: format!("{resolution_m} must be finite and > 0"),
+            });
+        }
+        let world = self.to_world()?;
+        let (lo, hi) = match self.bounds {
+            Some(b) => b,
+            None => {
+                let (l, h) = world.bounds();
+                ([l.x_m(), l.y_m()], [h.x_m(), h.y_m()])
+            }
+        };
+        let cells = ((hi[0] - lo[0]) / resolution_m) * ((hi[1] - lo[1]) / resolution_m);
+        if cells > 1.0e8 {
+            return Err(SimError::InvalidConfig {
+                field: "resolution_m",
+                message: format!("{resolution_m} m gives {cells:.0} pixels; too many"),
+            });
+        }
+        Ok((world.rasterise(lo, hi, resolution_m), lo))
+    }
+}
+
+fn bitmap_to_gray(bm: &Bitmap) -> image::GrayImage {
+    image::GrayImage::from_fn(bm.width as u32, bm.height as u32, |x, y| {
+        let row = bm.height - 1 - y as usize;
+        image::Luma([if bm.occupied[row * bm.width + x as usize] {
+            0
+        } else {
+            254
+        }])
+    })
+}
+
+/// Writes `bytes` to `path` through a temporary file in the same folder and a rename.
+pub(crate) fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), SimError> {
+    let io = |source| SimError::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    let name = path
+        .file_name()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "out".into());
+    let tmp = dir.join(format!(".{name}.tmp{}", std::process::id()));
+    std::fs::write(&tmp, bytes).map_err(io)?;
+    std::fs::rename(&tmp, path).map_err(|e| {
+        let _ = std::fs::remove_file(&tmp);
+        io(e)
+    })
+}
+
+#[derive(Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct TomlWorld {
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    name: Option<String>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    cell_size_m: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    start: Option<Spanned<[f64; 3]>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    target: Option<[f64; 2]>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    bounds: Option<Spanned<TomlBounds>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    bitmap: Option<Spanned<TomlBitmap>>,
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    r#box: Vec<Spanned<TomlBox>>,
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    circle: Vec<Spanned<TomlCircle>>,
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    polygon: Vec<Spanned<TomlPolygon>>,
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    wall: Vec<Spanned<TomlWall>>,
+}
+
+#[derive(Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct TomlBounds {
+    min: [f64; 2],
+    max: [f64; 2],
+    #[serde(default)]
+    boundary: bool,
+}
+
+#[derive(Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct TomlBitmap {
+    image: String,
+    size: [f64; 2],
+    #[serde(default)]
+    centre: [f64; 2],
+    #[serde(default)]
+    boundary: bool,
+}
+
+#[derive(Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct TomlBox {
+    centre: [f64; 2],
+    size: [f64; 2],
+    #[serde(default)]
+    angle_deg: f64,
+}
+
+#[derive(Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct TomlCircle {
+    centre: [f64; 2],
+    radius: f64,
+}
+
+#[derive(Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct TomlPolygon {
+    points: Vec<[f64; 2]>,
+}
+
+#[derive(Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct TomlWall {
+    from: [f64; 2],
+    to: [f64; 2],
+    #[serde(default)]
+    thickness: f64,
+}
+
+/// 1-based line of byte offset `at` in `text`.
+pub(crate) fn line_of(text: &str, at: usize) -> usize {
+    text.as_bytes()[..at.min(text.len())]
+        .iter()
+        .filter(|&&b| b == b'\n')
+        .count()
+        + 1
+}
+
+/// A parsed TOML world: the description plus an optional bitmap reference.
+pub(crate) struct ParsedToml {
+    pub desc: WorldDescription,
+    pub cell_size_m: Option<f64>,
+    pub bitmap: Option<Bitmap>,
+}
+
+/// Parses the TOML world text; `path` names the file in errors and anchors the bitmap path.
+pub(crate) fn parse_toml(text: &str, path: &Path) -> Result<ParsedToml, SimError> {
+    let parse_err = |line: Option<usize>, field: &str, message: String| SimError::Parse {
+        path: path.to_path_buf(),
+        line,
+        field: field.to_string(),
+        message,
+    };
+    let file: TomlWorld = toml::from_str(text).map_err(|e| {
+        let line = e.span().map(|s| line_of(text, s.start));
+        parse_err(line, "toml", e.message().trim().to_string())
+    })?;
+    let mut desc = WorldDescription {
+        name: file.name.clone().unwrap_or_else(|| {
+            path.file_stem()
+                .map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_default()
+        }),
+        ..Default::default()
+    };
+    let finite = |v: &[f64]| v.iter().all(|x| x.is_finite());
+    if let Some(b) = &file.bounds {
+        let line = Some(line_of(text, b.span().start));
+        let b = b.get_ref();
+        if !(finite(&b.min) && finite(&b.max) && b.max[0] > b.min[0] && b.max[1] > b.min[1]) {
+            return Err(parse_err(
+                line,
+                "bounds",
+                "min and max must be finite with max > min".into(),
+            ));
+        }
+        desc.bounds = Some((b.min, b.max));
+        desc.boundary = b.boundary;
+    }
+    if let Some(s) = &file.start {
+        let v = *s.get_ref();
+        if !finite(&v) {
+            return Err(parse_err(
+                Some(line_of(text, s.span().start)),
+                "start",
+                "must be [x_m, y_m, theta_deg], finite".into(),
+            ));
+        }
+        desc.start = Some([v[0], v[1], v[2].to_radians()]);
+    }
+    desc.target = file.target;
+    // Each obstacle is checked as it is added, so an error names its line.
+    let mut push = |o: Obstacle, span: std::ops::Range<usize>, field: &str| {
+        let idx = desc.obstacles.len();
+        o.validate(idx).map_err(|e| {
+            parse_err(
+                Some(line_of(text, span.start)),
+                field,
+                e.to_string()
+                    .replace(&format!("invalid world: obstacle {idx}: "), ""),
+            )
+        })?;
+        desc.obstacles.push(o);
+        Ok::<(), SimError>(())
+    };
+    for b in &file.r#box {
+        let v = b.get_ref();
+        push(
+            Obstacle::Box {
+                centre: v.centre,
+                size: v.size,
+                angle_rad: v.angle_deg.to_radians(),
+            },
+            b.span(),
+            "box",
+        )?;
+    }
+    for c in &file.circle {
+        let v = c.get_ref();
+        push(
+            Obstacle::Circle {
+                centre: v.centre,
+                radius: v.radius,
+            },
+            c.span(),
+            "circle",
+        )?;
+    }
+    for p in &file.polygon {
+        push(
+            Obstacle::Polygon {
+                points: p.get_ref().points.clone(),
+            },
+            p.span(),
+            "polygon",
+        )?;
+    }
+    for w in &file.wall {
+        let v = w.get_ref();
+        if !(v.thickness.is_finite() && v.thickness >= 0.0) {
+            return Err(parse_err(
+                Some(line_of(text, w.span().start)),
+                "wall.thickness",
+                format!("{} must be finite and >= 0", v.thickness),
+            ));
+        }
+        let o = if v.thickness > 0.0 {
+            let d = [v.to[0] - v.from[0], v.to[1] - v.from[1]];
+            Obstacle::Box {
+                centre: [(v.from[0] + v.to[0]) / 2.0, (v.from[1] + v.to[1]) / 2.0],
+                size: [d[0].hypot(d[1]).max(1e-9), v.thickness],
+                angle_rad: d[1].atan2(d[0]),
+            }
+        } else {
+            Obstacle::Segment { a: v.from, b: v.to }
+        };
+        push(o, w.span(), "wall")?;
+    }
+    let bitmap = match &file.bitmap {
+        None => None,
+        Some(b) => {
+            let line = Some(line_of(text, b.span().start));
+            let v = b.get_ref();
+            if !(finite(&v.size) && v.size[0] > 0.0 && v.size[1] > 0.0 && finite(&v.centre)) {
+                return Err(parse_err(
+                    line,
+                    "bitmap.size",
+                    "size must be > 0 and centre finite".into(),
+                ));
+            }
+            let img_path = path.parent().unwrap_or(Path::new(".")).join(&v.image);
+            let img = image::open(&img_path)
+                .map_err(|e| {
+                    parse_err(line, "bitmap.image", format!("{}: {e}", img_path.display()))
+                })?
+                .to_rgba8();
+            Some(
+                bitmap_from_image(&img, v.size, v.centre, v.boundary)
+                    .ok_or_else(|| parse_err(line, "bitmap.image", "image is empty".into()))?,
+            )
+        }
+    };
+    if let Some(c) = file.cell_size_m
+        && !(c.is_finite() && c > 0.0)
+    {
+        return Err(parse_err(None, "cell_size_m", format!("{c} must be > 0")));
+    }
+    Ok(ParsedToml {
+        desc,
+        cell_size_m: file.cell_size_m,
+        bitmap,
+    })
+}
+
+impl World {
+    /// Builds a world from the TOML text of the native format; `path` names it in errors.
+    pub fn from_toml_str(text: &str, path: &Path) -> Result<World, SimError> {
+        let p = parse_toml(text, path)?;
+        World::from_parts(WorldParts {
+            name: p.desc.name.clone(),
+            bitmap: p.bitmap,
+            obstacles: p.desc.all_obstacles(),
+            cell_size_m: p.cell_size_m,
+        })
+    }
+}
+
+/// Reads a TOML world file as a description (bitmaps are not part of a description).
+pub fn read_description(path: &Path) -> Result<WorldDescription, SimError> {
+    let text = std::fs::read_to_string(path).map_err(|source| SimError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    Ok(parse_toml(&text, path)?.desc)
+}

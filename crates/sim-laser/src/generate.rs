@@ -1,0 +1,300 @@
+//! Seeded random worlds: a corridor with rooms on both sides, doors, and clutter.
+
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+use crate::{Obstacle, SimError, WorldDescription};
+
+/// Parameters of the random world generator.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GenParams {
+    /// World width, metres.
+    pub width_m: f64,
+    /// World height, metres.
+    pub height_m: f64,
+    /// Rooms on each side of the corridor.
+    pub rooms_per_side: usize,
+    /// Corridor width, metres.
+    pub corridor_width_m: f64,
+    /// Door width, metres.
+    pub door_width_m: f64,
+    /// Wall thickness, metres.
+    pub wall_thickness_m: f64,
+    /// Probability that two neighbouring rooms share a door.
+    pub side_door_prob: f64,
+    /// Number of clutter boxes.
+    pub boxes: usize,
+    /// Number of round clutter obstacles.
+    pub circles: usize,
+    /// Smallest and largest clutter size (box side, circle diameter), metres.
+    pub clutter_size_m: [f64; 2],
+    /// Free gap kept between clutter, walls, doors, start and target, metres.
+    pub clearance_m: f64,
+}
+
+impl Default for GenParams {
+    fn default() -> Self {
+        Self {
+            width_m: 16.0,
+            height_m: 10.0,
+            rooms_per_side: 3,
+            corridor_width_m: 1.6,
+            door_width_m: 1.0,
+            wall_thickness_m: 0.1,
+            side_door_prob: 0.5,
+            boxes: 8,
+            circles: 6,
+            clutter_size_m: [0.2, 0.6],
+            clearance_m: 0.7,
+        }
+    }
+}
+
+impl GenParams {
+    fn validate(&self) -> Result<(), SimError> {
+        let bad =
+            |field: &'static str, message: String| Err(SimError::InvalidConfig { field, message });
+        for (f, v) in [
+            ("width_m", self.width_m),
+            ("height_m", self.height_m),
+            ("corridor_width_m", self.corridor_width_m),
+            ("door_width_m", self.door_width_m),
+            ("wall_thickness_m", self.wall_thickness_m),
+            ("clearance_m", self.clearance_m),
+        ] {
+            if !(v.is_finite() && v > 0.0) {
+                return bad(f, format!("{v} must be finite and > 0"));
+            }
+        }
+        if self.rooms_per_side == 0 {
+            return bad("rooms_per_side", "must be at least 1".into());
+        }
+        let room_w = self.width_m / self.rooms_per_side as f64;
+        if room_w < self.door_width_m + 4.0 * self.wall_thickness_m + 0.4 {
+            return bad(
+                "rooms_per_side",
+                format!("rooms {room_w:.2} m wide are too narrow for a door"),
+            );
+        }
+        let room_h = (self.height_m - self.corridor_width_m) / 2.0;
+        if room_h < self.door_width_m + 4.0 * self.wall_thickness_m + 0.4 {
+            return bad(
+                "height_m",
+                format!("rooms {room_h:.2} m deep are too shallow"),
+            );
+        }
+        let [a, b] = self.clutter_size_m;
+        if !(a.is_finite() && b.is_finite() && a > 0.0 && b >= a) {
+            return bad(
+                "clutter_size_m",
+                format!("[{a}, {b}] must be 0 < min <= max"),
+            );
+        }
+        if !(0.0..=1.0).contains(&self.side_door_prob) {
+            return bad(
+                "side_door_prob",
+                format!("{} must be in 0..=1", self.side_door_prob),
+            );
+        }
+        Ok(())
+    }
+}
+
+/// A horizontal or vertical wall from `a` to `b` along one axis, with gaps, as boxes.
+fn wall_with_gaps(
+    out: &mut Vec<Obstacle>,
+    horizontal: bool,
+    fixed: f64,
+    from: f64,
+    to: f64,
+    gaps: &[(f64, f64)],
+    t: f64,
+) {
+    let mut cuts: Vec<(f64, f64)> = gaps.to_vec();
+    cuts.sort_by(|x, y| x.0.total_cmp(&y.0));
+    let mut s = from;
+    let mut pieces = Vec::new();
+    for (g0, g1) in cuts {
+        if g0 > s {
+            pieces.push((s, g0));
+        }
+        s = s.max(g1);
+    }
+    if to > s {
+        pieces.push((s, to));
+    }
+    for (p0, p1) in pieces {
+        let (c, len) = ((p0 + p1) / 2.0, p1 - p0);
+        if len <= 1e-9 {
+            continue;
+        }
+        out.push(if horizontal {
+            Obstacle::Box {
+                centre: [c, fixed],
+                size: [len, t],
+                angle_rad: 0.0,
+            }
+        } else {
+            Obstacle::Box {
+                centre: [fixed, c],
+                size: [t, len],
+                angle_rad: 0.0,
+            }
+        });
+    }
+}
+
+/// Generates a world: a corridor along x through the middle, `rooms_per_side` rooms above and
+/// below it, each with a door onto the corridor (and sometimes onto its neighbour), clutter
+/// boxes and discs inside the rooms, a start in the first room and a target in the last.
+/// The same seed gives the same world.
+///
+/// ```
+/// use sim_laser::{GenParams, generate_world};
+/// let a = generate_world(3, &GenParams::default()).unwrap();
+/// let b = generate_world(3, &GenParams::default()).unwrap();
+/// assert_eq!(a, b);
+/// let w = a.to_world().unwrap();
+/// let s = a.start.unwrap();
+/// assert!(!w.disc_collides(scan_types::WorldPoint::new(s[0], s[1]), 0.3));
+/// ```
+pub fn generate_world(seed: u64, p: &GenParams) -> Result<WorldDescription, SimError> {
+    p.validate()?;
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let (hw, hh, t) = (p.width_m / 2.0, p.height_m / 2.0, p.wall_thickness_m);
+    let c2 = p.corridor_width_m / 2.0;
+    let n = p.rooms_per_side;
+    let mut obs = Vec::new();
+    // Outer walls, inside the bounds.
+    wall_with_gaps(&mut obs, true, -hh + t / 2.0, -hw, hw, &[], t);
+    wall_with_gaps(&mut obs, true, hh - t / 2.0, -hw, hw, &[], t);
+    wall_with_gaps(&mut obs, false, -hw + t / 2.0, -hh + t, hh - t, &[], t);
+    wall_with_gaps(&mut obs, false, hw - t / 2.0, -hh + t, hh - t, &[], t);
+    // Room dividers: jittered splits of the width, the same above and below.
+    let room_w = p.width_m / n as f64;
+    let jitter = (room_w - p.door_width_m - 4.0 * t - 0.4).max(0.0) * 0.25;
+    let mut xs = vec![-hw];
+    for k in 1..n {
+        xs.push(-hw + k as f64 * room_w + rng.random_range(-jitter..=jitter));
+    }
+    xs.push(hw);
+    // Rooms: (x0, x1, y0, y1) interiors; doors as points to keep clear.
+    let mut rooms = Vec::new();
+    let mut doors: Vec<[f64; 2]> = Vec::new();
+    let dw = p.door_width_m;
+    for side in [1.0f64, -1.0] {
+        let wall_y = side * (c2 + t / 2.0);
+        let (ry0, ry1) = if side > 0.0 {
+            (c2 + t, hh - t)
+        } else {
+            (-hh + t, -c2 - t)
+        };
+        let mut gaps = Vec::new();
+        for k in 0..n {
+            let (x0, x1) = (xs[k] + t, xs[k + 1] - t);
+            let lo = x0 + t + 0.1;
+            let hi = x1 - t - 0.1 - dw;
+            let g0 = if hi > lo {
+                rng.random_range(lo..hi)
+            } else {
+                (x0 + x1 - dw) / 2.0
+            };
+            gaps.push((g0, g0 + dw));
+            doors.push([g0 + dw / 2.0, wall_y]);
+            rooms.push((x0, x1, ry0, ry1));
+        }
+        wall_with_gaps(&mut obs, true, wall_y, -hw + t, hw - t, &gaps, t);
+        for &x in xs.iter().take(n).skip(1) {
+            let mut g = Vec::new();
+            if rng.random::<f64>() < p.side_door_prob {
+                let lo = ry0 + 0.1;
+                let hi = ry1 - 0.1 - dw;
+                if hi > lo {
+                    let g0 = rng.random_range(lo..hi);
+                    g.push((g0, g0 + dw));
+                    doors.push([x, g0 + dw / 2.0]);
+                }
+            }
+            wall_with_gaps(&mut obs, false, x, ry0, ry1, &g, t);
+        }
+    }
+    let centre_of = |r: &(f64, f64, f64, f64)| [(r.0 + r.1) / 2.0, (r.2 + r.3) / 2.0];
+    let start_room = rooms[0];
+    let target_room = rooms[rooms.len() - 1];
+    let start_xy = centre_of(&start_room);
+    let target = centre_of(&target_room);
+    let start_theta = rng.random_range(-std::f64::consts::PI..std::f64::consts::PI);
+    // Clutter, rejection-sampled inside rooms; placed items as (centre, circumradius).
+    let mut placed: Vec<([f64; 2], f64)> = Vec::new();
+    let keep_clear: Vec<[f64; 2]> = doors.iter().copied().chain([start_xy, target]).collect();
+    let gap = p.clearance_m;
+    let kinds = std::iter::repeat_n(true, p.boxes).chain(std::iter::repeat_n(false, p.circles));
+    for is_box in kinds {
+        for _attempt in 0..200 {
+            let r = &rooms[rng.random_range(0..rooms.len())];
+            let size = rng.random_range(p.clutter_size_m[0]..=p.clutter_size_m[1]);
+            let (o, rad) = if is_box {
+                let w = size;
+                let h = rng.random_range(p.clutter_size_m[0]..=p.clutter_size_m[1]);
+                let ang = rng.random_range(0.0..std::f64::consts::PI);
+                (
+                    Obstacle::Box {
+                        centre: [0.0, 0.0],
+                        size: [w, h],
+                        angle_rad: ang,
+                    },
+                    0.5 * w.hypot(h),
+                )
+            } else {
+                (
+                    Obstacle::Circle {
+                        centre: [0.0, 0.0],
+                        radius: size / 2.0,
+                    },
+                    size / 2.0,
+                )
+            };
+            // A full gap from the room's walls keeps every room traversable.
+            let (x0, x1, y0, y1) = (
+                r.0 + rad + gap,
+                r.1 - rad - gap,
+                r.2 + rad + gap,
+                r.3 - rad - gap,
+            );
+            if x1 <= x0 || y1 <= y0 {
+                continue;
+            }
+            let c = [rng.random_range(x0..x1), rng.random_range(y0..y1)];
+            let d = |q: [f64; 2]| (q[0] - c[0]).hypot(q[1] - c[1]);
+            if keep_clear.iter().any(|&q| d(q) < rad + gap + dw / 2.0) {
+                continue;
+            }
+            if placed.iter().any(|&(q, qr)| d(q) < rad + qr + gap) {
+                continue;
+            }
+            placed.push((c, rad));
+            obs.push(match o {
+                Obstacle::Box {
+                    size, angle_rad, ..
+                } => Obstacle::Box {
+                    centre: c,
+                    size,
+                    angle_rad,
+                },
+                _ => Obstacle::Circle {
+                    centre: c,
+                    radius: rad,
+                },
+            });
+            break;
+        }
+    }
+    Ok(WorldDescription {
+        name: format!("generated-{seed}"),
+        bounds: Some(([-hw, -hh], [hw, hh])),
+        boundary: false,
+        obstacles: obs,
+        start: Some([start_xy[0], start_xy[1], start_theta]),
+        target: Some(target),
+    })
+}

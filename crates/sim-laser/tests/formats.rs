@@ -1,0 +1,286 @@
+//! World formats: the native TOML, map_server YAML + PGM, Stage bitmaps, and their agreement.
+
+use std::f64::consts::{FRAC_PI_2, PI};
+use std::path::Path;
+
+use scan_types::WorldPoint;
+use sim_laser::{GenParams, Obstacle, SimError, World, WorldDescription, generate_world};
+
+const ROOM: &str = r#"
+name = "room"
+[bounds]
+min = [-2.0, -2.0]
+max = [2.0, 2.0]
+boundary = true
+
+[[box]]
+centre = [1.0, 0.0]
+size = [0.4, 0.4]
+
+[[circle]]
+centre = [0.0, 1.0]
+radius = 0.25
+
+[[wall]]
+from = [-1.0, -1.5]
+to = [-1.0, 1.5]
+"#;
+
+fn p(x: f64, y: f64) -> WorldPoint {
+    WorldPoint::new(x, y)
+}
+
+#[test]
+fn toml_world_ranges_by_hand() {
+    let w = World::from_toml_str(ROOM, Path::new("room.toml")).unwrap();
+    let o = p(0.0, 0.0);
+    // Box face at x = 0.8; circle bottom at y = 0.75; wall at x = -1; boundary at y = -2.
+    assert!((w.raycast(o, 0.0, 10.0).unwrap() - 0.8).abs() < 1e-9);
+    assert!((w.raycast(o, FRAC_PI_2, 10.0).unwrap() - 0.75).abs() < 1e-9);
+    assert!((w.raycast(o, PI, 10.0).unwrap() - 1.0).abs() < 1e-9);
+    assert!((w.raycast(o, -FRAC_PI_2, 10.0).unwrap() - 2.0).abs() < 1e-9);
+    // Past the wall's end (y = 1.5) to the boundary x = -2: from (0, 1.75) heading -x.
+    assert!((w.raycast(p(0.0, 1.75), PI, 10.0).unwrap() - 2.0).abs() < 1e-9);
+    assert!(w.is_occupied(p(1.0, 0.1)));
+    assert!(w.is_occupied(p(0.1, 1.0)));
+    assert!(!w.is_occupied(p(0.5, 0.5)));
+}
+
+fn parse_err(text: &str) -> String {
+    match World::from_toml_str(text, Path::new("bad.toml")) {
+        Ok(_) => panic!("accepted a bad world:\n{text}"),
+        Err(e @ SimError::Parse { .. }) => e.to_string(),
+        Err(e) => panic!("wrong error kind: {e}"),
+    }
+}
+
+#[test]
+fn toml_errors_name_file_line_and_field() {
+    let e = parse_err("[[circle]]\ncentre = [0.0, 0.0]\nradius = -1.0\n");
+    assert!(e.starts_with("bad.toml:1: circle:"), "{e}");
+    assert!(e.contains("radius"), "{e}");
+    let e = parse_err(
+        "name = \"x\"\n\n[[box]]\ncentre = [0.0, 0.0]\nsize = [1.0, 1.0]\nangel_deg = 3\n",
+    );
+    assert!(e.starts_with("bad.toml:6:"), "{e}");
+    assert!(e.contains("angel_deg"), "{e}");
+    let e = parse_err("[[polygon]]\npoints = [[0.0, 0.0], [1.0, 0.0]]\n");
+    assert!(
+        e.contains("bad.toml:1: polygon") && e.contains("3 points"),
+        "{e}"
+    );
+    let e = parse_err("name = \n");
+    assert!(e.starts_with("bad.toml:1:"), "{e}");
+    let e = parse_err("[bounds]\nmin = [1.0, 1.0]\nmax = [0.0, 2.0]\n");
+    assert!(e.contains("bounds"), "{e}");
+}
+
+#[test]
+fn load_reports_missing_and_unknown_files() {
+    let e = World::load("/nonexistent/w.toml").unwrap_err().to_string();
+    assert!(e.contains("/nonexistent/w.toml"), "{e}");
+    let e = World::load("w.xyz").unwrap_err().to_string();
+    assert!(e.contains("w.xyz") && e.contains("extension"), "{e}");
+}
+
+/// A world of pixel-aligned boxes (0.05 m grid) inside a 0.05 m thick frame.
+fn aligned_world() -> WorldDescription {
+    let frame = |cx: f64, cy: f64, w: f64, h: f64| Obstacle::Box {
+        centre: [cx, cy],
+        size: [w, h],
+        angle_rad: 0.0,
+    };
+    WorldDescription {
+        name: "aligned".into(),
+        bounds: Some(([-2.0, -2.0], [2.0, 2.0])),
+        boundary: false,
+        obstacles: vec![
+            frame(0.0, -1.975, 4.0, 0.05),
+            frame(0.0, 1.975, 4.0, 0.05),
+            frame(-1.975, 0.0, 0.05, 4.0),
+            frame(1.975, 0.0, 0.05, 4.0),
+            frame(0.5, 0.5, 0.5, 0.3),
+            frame(-1.0, 0.0, 0.2, 1.0),
+            frame(0.75, -1.0, 0.1, 0.1),
+        ],
+        start: None,
+        target: None,
+    }
+}
+
+fn assert_same_ranges(a: &World, b: &World, tol: f64) {
+    let mut n = 0;
+    for (x, y) in [(0.0, 0.0), (-0.3, 1.2), (1.2, -1.5), (0.1, -0.4)] {
+        for k in 0..720 {
+            let ang = (k as f64 * 0.5 + 0.123).to_radians();
+            let ra = a.raycast(p(x, y), ang, 10.0);
+            let rb = b.raycast(p(x, y), ang, 10.0);
+            match (ra, rb) {
+                (Some(u), Some(v)) => assert!((u - v).abs() < tol, "({x},{y}) {ang}: {u} vs {v}"),
+                (u, v) => panic!("({x},{y}) {ang}: {u:?} vs {v:?}"),
+            }
+            n += 1;
+        }
+    }
+    assert_eq!(n, 4 * 720);
+}
+
+#[test]
+fn bitmap_and_vector_forms_agree() {
+    let desc = aligned_world();
+    let vector = desc.to_world().unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    // Stage PNG at 0.05 m per pixel, reloaded with its size.
+    let png = dir.path().join("aligned.png");
+    desc.write_png(&png, 0.05).unwrap();
+    let stage = World::load_stage_bitmap(&png, 4.0, 4.0, false).unwrap();
+    assert_same_ranges(&vector, &stage, 1e-6);
+    // map_server pair.
+    let yaml = dir.path().join("aligned.yaml");
+    desc.write_map_server(&yaml, 0.05).unwrap();
+    let ms = World::load(&yaml).unwrap();
+    assert_same_ranges(&vector, &ms, 1e-6);
+    // TOML round trip.
+    let toml = dir.path().join("aligned.toml");
+    desc.write_toml(&toml).unwrap();
+    let back = World::load(&toml).unwrap();
+    assert_same_ranges(&vector, &back, 1e-9);
+}
+
+#[test]
+fn map_server_by_hand() {
+    // 4 x 3 PGM, 0.5 m pixels, origin (1, 2): the middle-row, third-column pixel is black.
+    let dir = tempfile::tempdir().unwrap();
+    let mut pgm = b"P5\n4 3\n255\n".to_vec();
+    pgm.extend_from_slice(&[254, 254, 254, 254, 254, 254, 0, 254, 254, 205, 254, 254]);
+    std::fs::write(dir.path().join("m.pgm"), &pgm).unwrap();
+    let yaml = dir.path().join("m.yaml");
+    std::fs::write(
+        &yaml,
+        "image: m.pgm\nresolution: 0.5\norigin: [1.0, 2.0, 0.0]\nnegate: 0\noccupied_thresh: 0.65\nfree_thresh: 0.196\n",
+    )
+    .unwrap();
+    let w = World::load(&yaml).unwrap();
+    // Middle row covers y in [2.5, 3.0]; column 2 covers x in [2.0, 2.5].
+    assert!((w.raycast(p(0.0, 2.75), 0.0, 10.0).unwrap() - 2.0).abs() < 1e-12);
+    // The unknown (205) pixel at the bottom row is free.
+    assert_eq!(w.raycast(p(0.0, 2.25), 0.0, 10.0), None);
+    // Negated, the white pixels become obstacles: the first is at x = 1.
+    std::fs::write(
+        &yaml,
+        "image: m.pgm\nresolution: 0.5\norigin: [1.0, 2.0, 0.0]\nnegate: 1\noccupied_thresh: 0.65\nfree_thresh: 0.196\n",
+    )
+    .unwrap();
+    let w = World::load(&yaml).unwrap();
+    assert!((w.raycast(p(0.0, 2.75), 0.0, 10.0).unwrap() - 1.0).abs() < 1e-12);
+    // Errors name the line and key.
+    std::fs::write(&yaml, "image: m.pgm\nresolution: abc\norigin: [0, 0, 0]\n").unwrap();
+    let e = World::load(&yaml).unwrap_err().to_string();
+    assert!(e.contains("m.yaml:2: resolution"), "{e}");
+    std::fs::write(&yaml, "image: m.pgm\nresolution: 0.1\norigin: [0, 0]\n").unwrap();
+    let e = World::load(&yaml).unwrap_err().to_string();
+    assert!(e.contains("m.yaml:3: origin"), "{e}");
+    std::fs::write(
+        &yaml,
+        "image: nope.pgm\nresolution: 0.1\norigin: [0, 0, 0]\n",
+    )
+    .unwrap();
+    let e = World::load(&yaml).unwrap_err().to_string();
+    assert!(e.contains("nope.pgm"), "{e}");
+}
+
+#[test]
+#[allow(clippy::print_stdout)]
+fn nav2_maps_load() {
+    let dir = Path::new(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../../shared/worlds/nav2"
+    ));
+    if !dir.exists() {
+        println!("note: {} missing, skipped", dir.display());
+        return;
+    }
+    let w = World::load(dir.join("tb3_sandbox.yaml")).unwrap();
+    let (lo, hi) = w.bounds();
+    // 384 pixels of 0.05 m from (-10, -10).
+    assert!(
+        (lo.x_m() + 10.0).abs() < 1e-9 && (hi.x_m() - 9.2).abs() < 1e-9,
+        "{lo:?} {hi:?}"
+    );
+    let d = World::load(dir.join("depot.yaml")).unwrap();
+    let (lo, hi) = d.bounds();
+    assert!((hi.x_m() - lo.x_m() - 604.0 * 0.05).abs() < 1e-9);
+    assert!((hi.y_m() - lo.y_m() - 307.0 * 0.05).abs() < 1e-9);
+    // Both maps have walls: from the middle of the depot, most rays hit within 30 m.
+    let c = p((lo.x_m() + hi.x_m()) / 2.0, (lo.y_m() + hi.y_m()) / 2.0);
+    let hits = (0..360)
+        .filter(|k| d.raycast(c, (*k as f64).to_radians(), 30.0).is_some())
+        .count();
+    assert!(hits > 300, "{hits}");
+}
+
+#[test]
+fn generated_worlds_are_seeded_and_round_trip() {
+    let g = GenParams::default();
+    let a = generate_world(11, &g).unwrap();
+    assert_eq!(a, generate_world(11, &g).unwrap());
+    assert_ne!(a, generate_world(12, &g).unwrap());
+    let n_box = a
+        .obstacles
+        .iter()
+        .filter(|o| matches!(o, Obstacle::Box { .. }))
+        .count();
+    let n_circle = a
+        .obstacles
+        .iter()
+        .filter(|o| matches!(o, Obstacle::Circle { .. }))
+        .count();
+    assert!(
+        n_circle > 0 && n_box > 10,
+        "{n_box} boxes {n_circle} circles"
+    );
+    let w = a.to_world().unwrap();
+    let s = a.start.unwrap();
+    let t = a.target.unwrap();
+    assert!(!w.disc_collides(p(s[0], s[1]), 0.5));
+    assert!(!w.disc_collides(p(t[0], t[1]), 0.5));
+    // The outer walls enclose the world.
+    for k in 0..36 {
+        assert!(
+            w.raycast(p(s[0], s[1]), (k as f64 * 10.0).to_radians(), 100.0)
+                .is_some()
+        );
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let f = dir.path().join("g.toml");
+    a.write_toml(&f).unwrap();
+    let back = World::load(&f).unwrap();
+    for k in 0..360 {
+        let ang = (k as f64).to_radians();
+        let (u, v) = (
+            w.raycast(p(s[0], s[1]), ang, 30.0),
+            back.raycast(p(s[0], s[1]), ang, 30.0),
+        );
+        assert!((u.unwrap() - v.unwrap()).abs() < 1e-6, "{k}: {u:?} {v:?}");
+    }
+    assert!(
+        generate_world(
+            1,
+            &GenParams {
+                rooms_per_side: 40,
+                ..g.clone()
+            }
+        )
+        .is_err()
+    );
+    assert!(
+        generate_world(
+            1,
+            &GenParams {
+                width_m: f64::NAN,
+                ..g
+            }
+        )
+        .is_err()
+    );
+}
