@@ -90,6 +90,9 @@ pub struct DetectParams {
     pub corner_max_residual_m: f64,
     /// Fewest hits on each arm of a corner, besides the corner ray.
     pub corner_min_arm_rays: usize,
+    /// Place an edge half a ray toward the open side, on its fitted surface line (the true
+    /// end lies anywhere between the edge ray and the open ray: the middle halves the error).
+    pub edge_refine: bool,
     /// Place a corner where its two fitted arms intersect instead of at the corner ray's hit.
     pub corner_refine: bool,
     /// A hit this close to the maximum range is flagged `near_range_limit`, metres.
@@ -102,6 +105,9 @@ pub struct DetectParams {
     pub reject_hidden_at_side: bool,
     /// Drop landmarks with fewer supporting hits than this (1 keeps a lone hit).
     pub min_support_rays: usize,
+    /// Fewest max-range rays in a row next to a jump edge (1 = the paper: a single miss in a
+    /// wall makes two landmarks).
+    pub min_open_rays: usize,
     /// Invalid (error) rays skipped between two valid rays; a longer gap splits the scan.
     pub max_skipped_errors: usize,
 }
@@ -120,29 +126,33 @@ impl Default for DetectParams {
             corner_max_residual_m: 0.02,
             corner_min_arm_rays: 3,
             corner_refine: true,
+            edge_refine: true,
             range_limit_margin_m: 0.1,
             reject_near_range_limit: true,
             reject_surface_continues: true,
             reject_hidden_at_side: false,
             min_support_rays: 2,
+            min_open_rays: 3,
             max_skipped_errors: 3,
         }
     }
 }
 
 impl DetectParams {
-    /// The paper as written: max-range jumps with `n = 1`, nothing flagged away.
+    /// The paper as written: max-range jumps with `n = 1`, nothing rejected (the stability
+    /// flags are still computed, with goalseek's margins, for inspection).
     pub fn paper() -> Self {
         Self {
             neighbour_n: 1,
             max_range_jumps: true,
             occlusion_edges: false,
             corners: false,
-            range_limit_margin_m: 0.0,
+            edge_refine: false,
             reject_near_range_limit: false,
             reject_surface_continues: false,
             reject_hidden_at_side: false,
             min_support_rays: 1,
+            min_open_rays: 1,
             ..Self::default()
         }
     }
@@ -158,6 +168,7 @@ impl DetectParams {
             reject_surface_continues: false,
             reject_hidden_at_side: false,
             min_support_rays: 1,
+            min_open_rays: 1,
             ..*self
         }
     }
@@ -286,6 +297,16 @@ fn jumps(geometry: &ScanGeometry, seg: &[Ray], params: &DetectParams, out: &mut 
             let mut j = p + dir;
             while seg[j as usize].hit.is_none() {
                 j += dir;
+            }
+            // The open run next to the edge must be long enough.
+            let mut open = 0usize;
+            let mut k = j - dir;
+            while k >= 0 && k < len && seg[k as usize].hit.is_none() {
+                open += 1;
+                k -= dir;
+            }
+            if open < params.min_open_rays {
+                continue;
             }
             let j = j as usize;
             // Open space lies toward p: below j when dir = +1.
@@ -459,6 +480,22 @@ fn edge_landmark(
         }
     }
     let l = geometry.robot_point(ray.index, range);
+    let (mut range_out, mut bearing_out) = (range, bearing);
+    if params.edge_refine && support.len() >= 3 && side != OpenSide::Both {
+        let od = open_dirs[0];
+        let q = pos as isize + od;
+        if q >= 0 && (q as usize) < seg.len() {
+            let b_mid = 0.5 * (bearing + geometry.bearing_rad(seg[q as usize].index));
+            if let Some((c, d, _)) = fit_line(&support) {
+                if let Some(t) = line_range_on_ray(c, d, b_mid) {
+                    if (t - range).abs() < 0.5 * params.occlusion_jump_m {
+                        range_out = t;
+                        bearing_out = b_mid;
+                    }
+                }
+            }
+        }
+    }
     let tol = 0.05;
     let hidden_at_side = support.iter().skip(1).any(|q| {
         q.x_m() > l.x_m() - tol
@@ -468,8 +505,8 @@ fn edge_landmark(
     let support_rays = support.len();
     let mut lm = Landmark {
         index: ray.index,
-        range_m: range,
-        bearing_rad: bearing,
+        range_m: range_out,
+        bearing_rad: bearing_out,
         kind,
         open_side: Some(side),
         near_range_limit,

@@ -22,13 +22,14 @@ pub struct TrackParams {
 }
 
 impl Default for TrackParams {
-    /// goalseek: 6 cm gate growing 3 cm per metre, one missed scan tolerated, point fallback on.
+    /// goalseek: 6 cm gate growing 3 cm per metre, one missed scan tolerated, no point
+    /// fallback (it slides along flat faces).
     fn default() -> Self {
         Self {
             gate_m: 0.06,
             gate_growth_per_m: 0.03,
             max_missed_scans: 1,
-            point_fallback: true,
+            point_fallback: false,
             detect: DetectParams::default(),
         }
     }
