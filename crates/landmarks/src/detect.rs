@@ -486,13 +486,12 @@ fn edge_landmark(
         let q = pos as isize + od;
         if q >= 0 && (q as usize) < seg.len() {
             let b_mid = 0.5 * (bearing + geometry.bearing_rad(seg[q as usize].index));
-            if let Some((c, d, _)) = fit_line(&support) {
-                if let Some(t) = line_range_on_ray(c, d, b_mid) {
-                    if (t - range).abs() < 0.5 * params.occlusion_jump_m {
-                        range_out = t;
-                        bearing_out = b_mid;
-                    }
-                }
+            if let Some((c, d, _)) = fit_line(&support)
+                && let Some(t) = line_range_on_ray(c, d, b_mid)
+                && (t - range).abs() < 0.5 * params.occlusion_jump_m
+            {
+                range_out = t;
+                bearing_out = b_mid;
             }
         }
     }
