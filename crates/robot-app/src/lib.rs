@@ -7,3 +7,4 @@ pub mod logging;
 pub mod outputs;
 pub mod plot;
 pub mod scan_csv;
+pub mod simsetup;

@@ -1,12 +1,160 @@
-//! `robot-app world`: under construction.
+//! `robot-app world`: generate seeded random worlds and describe world files.
 
-use clap::Args;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, bail};
+use clap::{Args, Subcommand};
+use sim_laser::{GenParams, World, generate_world};
 
 /// Arguments of `robot-app world`.
 #[derive(Debug, Args)]
-pub struct WorldArgs {}
+pub struct WorldArgs {
+    #[command(subcommand)]
+    command: WorldCommand,
+}
+
+#[derive(Debug, Subcommand)]
+enum WorldCommand {
+    /// Generate a seeded random world (rooms, doors, a corridor, clutter) and write it.
+    Generate(GenerateArgs),
+    /// Load a world file and print its size, obstacles and the scenario it stores.
+    Info(InfoArgs),
+}
+
+/// Arguments of `robot-app world generate`.
+#[derive(Debug, Args)]
+struct GenerateArgs {
+    /// Seed: the same seed and parameters give the same world.
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// Output file: .toml (native vector format), .yaml (map_server YAML + PGM beside it) or
+    /// .png (Stage bitmap). Use {seed} in the name to write several seeds.
+    #[arg(long)]
+    out: PathBuf,
+    /// Number of consecutive seeds to generate (needs {seed} in --out when > 1).
+    #[arg(long, default_value_t = 1)]
+    count: u64,
+    /// World width, metres.
+    #[arg(long, default_value_t = GenParams::default().width_m)]
+    width: f64,
+    /// World height, metres.
+    #[arg(long, default_value_t = GenParams::default().height_m)]
+    height: f64,
+    /// Rooms on each side of the corridor.
+    #[arg(long, default_value_t = GenParams::default().rooms_per_side)]
+    rooms: usize,
+    /// Corridor width, metres.
+    #[arg(long, default_value_t = GenParams::default().corridor_width_m)]
+    corridor: f64,
+    /// Door width, metres.
+    #[arg(long, default_value_t = GenParams::default().door_width_m)]
+    door: f64,
+    /// Clutter boxes.
+    #[arg(long, default_value_t = GenParams::default().boxes)]
+    boxes: usize,
+    /// Round clutter obstacles.
+    #[arg(long, default_value_t = GenParams::default().circles)]
+    circles: usize,
+    /// Pixel size of .yaml/.png outputs, metres.
+    #[arg(long, default_value_t = 0.02)]
+    resolution: f64,
+}
+
+/// Arguments of `robot-app world info`.
+#[derive(Debug, Args)]
+struct InfoArgs {
+    /// World file (.toml, .yaml, .png); omit for the paper's world.
+    path: Option<PathBuf>,
+}
 
 /// Runs `robot-app world`.
-pub fn run(_args: WorldArgs) -> anyhow::Result<()> {
-    anyhow::bail!("'robot-app world' is not implemented yet")
+pub fn run(args: WorldArgs) -> anyhow::Result<()> {
+    match args.command {
+        WorldCommand::Generate(a) => generate(a),
+        WorldCommand::Info(a) => info(a),
+    }
+}
+
+fn generate(a: GenerateArgs) -> anyhow::Result<()> {
+    let params = GenParams {
+        width_m: a.width,
+        height_m: a.height,
+        rooms_per_side: a.rooms,
+        corridor_width_m: a.corridor,
+        door_width_m: a.door,
+        boxes: a.boxes,
+        circles: a.circles,
+        ..GenParams::default()
+    };
+    let template = a.out.to_string_lossy().into_owned();
+    if a.count > 1 && !template.contains("{seed}") {
+        bail!("--count {} needs {{seed}} in --out ({template})", a.count);
+    }
+    let mut out = std::io::stdout().lock();
+    for seed in a.seed..a.seed.saturating_add(a.count.max(1)) {
+        let path = PathBuf::from(template.replace("{seed}", &seed.to_string()));
+        let desc = generate_world(seed, &params)?;
+        let ext = path
+            .extension()
+            .map(|e| e.to_string_lossy().to_ascii_lowercase())
+            .unwrap_or_default();
+        match ext.as_str() {
+            "toml" => desc.write_toml(&path)?,
+            "yaml" | "yml" => desc.write_map_server(&path, a.resolution)?,
+            "png" => desc.write_png(&path, a.resolution)?,
+            _ => bail!("{}: --out must end in .toml, .yaml or .png", path.display()),
+        }
+        let s = desc.start.unwrap_or_default();
+        let t = desc.target.unwrap_or_default();
+        writeln!(
+            out,
+            "{}: seed {seed}, {} obstacles, {} m x {} m, start {:.2},{:.2},{:.1} target {:.2},{:.2}{}",
+            path.display(),
+            desc.obstacles.len(),
+            params.width_m,
+            params.height_m,
+            s[0],
+            s[1],
+            s[2].to_degrees(),
+            t[0],
+            t[1],
+            if ext == "png" {
+                format!(" (load with size {},{})", params.width_m, params.height_m)
+            } else {
+                String::new()
+            }
+        )?;
+    }
+    Ok(())
+}
+
+fn info(a: InfoArgs) -> anyhow::Result<()> {
+    let world = match &a.path {
+        None => World::paper(),
+        Some(p) => World::load(p).with_context(|| format!("loading world {}", p.display()))?,
+    };
+    let (lo, hi) = world.bounds();
+    let (start, target) = crate::simsetup::scenario(a.path.as_deref().map(Path::new))?;
+    let mut out = std::io::stdout().lock();
+    writeln!(out, "world: {}", world.name())?;
+    writeln!(
+        out,
+        "bounds: ({:.3}, {:.3}) to ({:.3}, {:.3}) m",
+        lo.x_m(),
+        lo.y_m(),
+        hi.x_m(),
+        hi.y_m()
+    )?;
+    writeln!(out, "vector obstacles: {}", world.obstacle_count())?;
+    writeln!(
+        out,
+        "start: {:.3},{:.3},{:.2}  target: {:.3},{:.3}",
+        start.x_m,
+        start.y_m,
+        start.theta_rad.to_degrees(),
+        target.x_m(),
+        target.y_m()
+    )?;
+    Ok(())
 }
