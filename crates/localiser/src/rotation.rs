@@ -114,9 +114,34 @@ fn readings(geometry: &ScanGeometry, scan: &Scan) -> Vec<Option<Reading>> {
         .collect()
 }
 
+/// Neighbouring hits closer in range than this lie on one surface (else: an edge), metres.
+const SMOOTH_M: f64 = 0.1;
+
 /// Mean clipped squared difference and pair count at fractional shift `s` (rays).
-fn cost(before: &[Option<Reading>], after: &[Option<Reading>], s: f64, clip: f64) -> (f64, usize) {
+fn cost(
+    before: &[Option<Reading>],
+    after: &[Option<Reading>],
+    s: f64,
+    clip: f64,
+    inc: f64,
+) -> (f64, usize) {
     let n = before.len();
+    // Between two hits the surface is taken as the straight segment joining them (exact on
+    // flat walls, unlike interpolating the range): in the frame of the lower ray, the hits
+    // are (r0, 0) and (r1 cos inc, r1 sin inc) and the query ray points at phi = f inc.
+    let frac = s - s.floor();
+    let (sp, cp) = (frac * inc).sin_cos();
+    let (si, ci) = inc.sin_cos();
+    let between = |r0: f64, r1: f64| {
+        let (dx, dy) = (r1 * ci - r0, r1 * si);
+        let den = cp * dy - sp * dx;
+        let t = (r0 * dy) / den;
+        if den.abs() > 1e-12 && t.is_finite() && t > 0.0 {
+            t
+        } else {
+            r0 + frac * (r1 - r0)
+        }
+    };
     let mut sum = 0.0;
     let mut count = 0usize;
     for (i, a) in after.iter().enumerate() {
@@ -126,29 +151,41 @@ fn cost(before: &[Option<Reading>], after: &[Option<Reading>], s: f64, clip: f64
             continue;
         }
         let j0 = j.floor() as usize;
-        let f = j - j0 as f64;
         let j1 = (j0 + 1).min(n - 1);
-        let b = match (before[j0], before[j1]) {
+        let d = match (before[j0], before[j1]) {
             (Some(b0), Some(b1)) => {
-                if b0.open == b1.open && (b0.range - b1.range).abs() < clip {
-                    Reading {
-                        range: b0.range + f * (b1.range - b0.range),
-                        open: b0.open,
+                if b0.open == b1.open && (b0.range - b1.range).abs() < SMOOTH_M {
+                    // Smooth stretch: interpolate below one ray.
+                    if a.open && b0.open {
+                        continue;
                     }
-                } else if f < 0.5 {
-                    b0
+                    let b = if b0.open {
+                        b0.range
+                    } else {
+                        between(b0.range, b1.range)
+                    };
+                    (a.range - b).abs()
                 } else {
-                    b1
+                    // A discontinuity between the two rays: the ray may match either side.
+                    let side = |b: Reading| {
+                        if a.open && b.open {
+                            0.0
+                        } else {
+                            (a.range - b.range).abs()
+                        }
+                    };
+                    side(b0).min(side(b1))
                 }
             }
-            (Some(b0), None) if f < 0.5 => b0,
-            (None, Some(b1)) if f >= 0.5 => b1,
+            (Some(b), None) | (None, Some(b)) => {
+                if a.open && b.open {
+                    continue;
+                }
+                (a.range - b.range).abs()
+            }
             _ => continue,
         };
-        if a.open && b.open {
-            continue;
-        }
-        let d = (a.range - b.range).abs().min(clip);
+        let d = d.min(clip);
         sum += d * d;
         count += 1;
     }
@@ -177,7 +214,7 @@ pub fn measure_rotation_with(
     let half = (params.search_rad.abs() / inc.abs()).ceil() as i64;
     let clip = params.clip_m;
     let eval = |s: f64| {
-        let (c, k) = cost(&b, &a, s, clip);
+        let (c, k) = cost(&b, &a, s, clip, inc);
         if k >= params.min_pairs {
             (c, k)
         } else {
@@ -216,7 +253,7 @@ pub fn measure_rotation_with(
     let mut s = fine.1;
     let den = cm - 2.0 * fine.0 + cp;
     if cm.is_finite() && cp.is_finite() && den > 1e-15 {
-        s += 0.5 * step * (cm - cp) / den;
+        s += (0.5 * step * (cm - cp) / den).clamp(-0.5 * step, 0.5 * step);
     }
     let (c, pairs) = eval(s);
     let (c, pairs) = if c.is_finite() {
