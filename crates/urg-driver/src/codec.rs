@@ -684,7 +684,10 @@ pub fn decode_scan_body(
     let mut line_no = first_line_no;
     let mut first = true;
     while pos < body.len() {
-        let Some(len) = body[pos..].iter().position(|&c| c == LF) else {
+        // Full data lines are 64 characters and a checksum: try that before searching.
+        let full = DATA_LINE_CHARS + 1;
+        let fast = (body.get(pos + full) == Some(&LF)).then_some(full);
+        let Some(len) = fast.or_else(|| body[pos..].iter().position(|&c| c == LF)) else {
             return Err(UrgError::Framing {
                 what: format!("line {line_no} has no LF"),
                 offset: body_offset + pos,
@@ -756,19 +759,25 @@ pub fn decode_scan_body(
         });
     }
     let n = out.payload.len() / w;
-    out.ranges_mm.reserve(n);
+    // Every character was checked to lie in 0x30..=0x6F, so the subtractions cannot wrap.
+    out.ranges_mm.resize(n, 0);
     match kind {
-        DataKind::Range3 => out.ranges_mm.extend(out.payload.chunks_exact(3).map(dec3)),
-        DataKind::Range2 => out.ranges_mm.extend(
-            out.payload
-                .chunks_exact(2)
-                .map(|c| (u32::from(c[0] - 0x30) << 6) | u32::from(c[1] - 0x30)),
-        ),
+        DataKind::Range3 => {
+            for (d, c) in out.ranges_mm.iter_mut().zip(out.payload.chunks_exact(3)) {
+                *d = dec3(c);
+            }
+        }
+        DataKind::Range2 => {
+            for (d, c) in out.ranges_mm.iter_mut().zip(out.payload.chunks_exact(2)) {
+                *d = (u32::from(c[0] - 0x30) << 6) | u32::from(c[1] - 0x30);
+            }
+        }
         DataKind::RangeIntensity => {
-            out.intensities.reserve(n);
-            for c in out.payload.chunks_exact(6) {
-                out.ranges_mm.push(dec3(&c[..3]));
-                out.intensities.push(dec3(&c[3..]));
+            out.intensities.resize(n, 0);
+            let pairs = out.ranges_mm.iter_mut().zip(out.intensities.iter_mut());
+            for ((r, i), c) in pairs.zip(out.payload.chunks_exact(6)) {
+                *r = dec3(&c[..3]);
+                *i = dec3(&c[3..]);
             }
         }
     }
