@@ -11,6 +11,9 @@ pub struct TrackParams {
     pub gate_m: f64,
     /// The gate grows by this much per metre driven since the last fix (drive scale error).
     pub gate_growth_per_m: f64,
+    /// The gate also grows by this many ray spacings at the landmark's range (an edge's hit
+    /// jumps by up to one spacing along its face from scan to scan).
+    pub gate_ray_spacings: f64,
     /// Scans in a row without a match before the landmark counts as lost; meanwhile the
     /// tracker reports the prediction.
     pub max_missed_scans: usize,
@@ -22,13 +25,15 @@ pub struct TrackParams {
 }
 
 impl Default for TrackParams {
-    /// goalseek: 6 cm gate growing 3 cm per metre, one missed scan tolerated, no point
-    /// fallback (it slides along flat faces).
+    /// goalseek: 6 cm gate growing 3 cm per metre driven and by two ray spacings at the
+    /// landmark's range, three missed scans tolerated, no point fallback (it slides along
+    /// flat faces).
     fn default() -> Self {
         Self {
             gate_m: 0.06,
             gate_growth_per_m: 0.03,
-            max_missed_scans: 1,
+            gate_ray_spacings: 2.0,
+            max_missed_scans: 3,
             point_fallback: false,
             detect: DetectParams::default(),
         }
@@ -41,6 +46,7 @@ impl TrackParams {
         Self {
             gate_m: 0.2,
             gate_growth_per_m: 0.0,
+            gate_ray_spacings: 0.0,
             max_missed_scans: 0,
             point_fallback: false,
             detect: DetectParams::paper(),
@@ -127,7 +133,8 @@ impl Tracker {
         }
         let pred = self.predict(travelled_m);
         let gate = self.params.gate_m
-            + self.params.gate_growth_per_m * (travelled_m - self.last_travelled_m).abs();
+            + self.params.gate_growth_per_m * (travelled_m - self.last_travelled_m).abs()
+            + self.params.gate_ray_spacings * pred.range_m() * geometry.increment_rad.abs();
         let found = detect(geometry, scan, &self.params.detect.permissive());
         let compatible = |l: &Landmark| match (self.last.open_side, l.open_side) {
             (Some(a), Some(b)) => a == b || a == OpenSide::Both || b == OpenSide::Both,

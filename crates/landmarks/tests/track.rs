@@ -66,7 +66,7 @@ fn landmark_that_vanishes_mid_leg_is_reported_lost() {
             TrackUpdate::Tracked(_)
         ));
     }
-    // The box is carried away: one scan predicted (max_missed_scans = 1), then lost.
+    // The box is carried away: the tracker coasts on its prediction.
     let empty = scan_at(&g, &[], 1.1, 0.0, 0.0);
     match tracker.update(&g, &empty, 1.1) {
         TrackUpdate::Predicted(p) => {
@@ -76,11 +76,19 @@ fn landmark_that_vanishes_mid_leg_is_reported_lost() {
         }
         other => panic!("expected a prediction, got {other:?}"),
     }
-    assert_eq!(tracker.update(&g, &empty, 1.2), TrackUpdate::Lost);
+    // Two more predictions (max_missed_scans = 3), then lost.
+    for d in [1.2, 1.3] {
+        assert!(matches!(
+            tracker.update(&g, &empty, d),
+            TrackUpdate::Predicted(_)
+        ));
+    }
+    assert_eq!(tracker.misses(), 3);
+    assert_eq!(tracker.update(&g, &empty, 1.4), TrackUpdate::Lost);
     assert!(tracker.is_lost());
     // Once lost, always lost, even if the box comes back.
-    let back = scan_at(&g, &walls, 1.3, 0.0, 0.0);
-    assert_eq!(tracker.update(&g, &back, 1.3), TrackUpdate::Lost);
+    let back = scan_at(&g, &walls, 1.5, 0.0, 0.0);
+    assert_eq!(tracker.update(&g, &back, 1.5), TrackUpdate::Lost);
 }
 
 #[test]
