@@ -1,4 +1,5 @@
-//! The fast kernel: each disc visits only the rays it can touch, using per-geometry tables.
+//! The fast kernel: each disc visits only the rays it can touch and no nearer disc hides,
+//! using per-geometry tables.
 
 use std::f64::consts::{FRAC_PI_2, TAU};
 
@@ -10,17 +11,22 @@ use crate::definition::{effective_radius_m, free_length_m, obstacle_range_m};
 const WINDOW_BINS: usize = 1024;
 /// Bins of the depth ordering over [0, max range].
 const DEPTH_BINS: usize = 64;
+/// Rays per block of the skip test.
+const BLOCK: usize = 8;
 
 /// The fast expansion kernel for one scan geometry: same results as
 /// [`crate::clearances_reference`] (within 1e-9 m), far fewer operations.
 ///
-/// Every disc centre lies on a ray, so the angle between disc `j` and ray `k` is
-/// `(k - j) * increment`: its cosine and squared sine come from tables built once in
-/// [`Expander::new`]. A disc at distance `d` can only touch rays within `asin(r / d)` of its
-/// own bearing (within 90 deg when the robot is inside it); that window comes from a table
-/// too. Discs are visited nearest first, and a block of rays is skipped when the disc cannot
-/// be entered before every ray of the block is already blocked (an entry is never nearer
-/// than `d - r`).
+/// - Every disc centre lies on a ray, so the angle between disc `j` and ray `k` is
+///   `(k - j) * increment`: its cosine and squared sine come from tables built once.
+/// - A disc at range `d` can only touch rays within `asin(r / d)` of its own bearing
+///   (within 90 deg when the robot is inside it); that window comes from a table too.
+/// - The entry into a disc grows with its range and with its angle off the ray, so a disc
+///   at least as near as disc `j` and lying between disc `j` and ray `k` is always entered
+///   first: disc `j`'s window stops at the first such disc on each side (found for all
+///   discs at once with a monotonic stack).
+/// - Discs are visited nearest first, and a block of rays is skipped when every ray of it
+///   is already blocked nearer than `d - r`, the nearest possible entry.
 ///
 /// ```
 /// use expansion::{Expander, clearances_reference};
@@ -47,16 +53,23 @@ pub struct Expander {
     window_inside: usize,
     /// Shifts in rays of the extra windows of scans that wrap around (more than 270 deg).
     wrap_shifts: Vec<f64>,
-    /// Scratch: hit indices ordered by depth bin.
+    /// Scratch: obstacle range of each ray (+inf when the ray is not an obstacle).
+    depth: Vec<f64>,
+    /// Scratch: for each obstacle ray, one past the nearest ray on its left that is at
+    /// least as near (0 if none).
+    stop_left: Vec<u32>,
+    /// Scratch: for each obstacle ray, the nearest ray on its right that is at least as
+    /// near (the ray count if none).
+    stop_right: Vec<u32>,
+    /// Scratch: the monotonic stack that finds them.
+    stack: Vec<u32>,
+    /// Scratch: obstacle rays ordered by depth bin.
     order: Vec<u32>,
     /// Scratch: depth-bin counts, then starts.
     bins: Vec<u32>,
     /// Scratch: largest clearance in each block of rays.
     block_max: Vec<f64>,
 }
-
-/// Rays per block of the skip test.
-const BLOCK: usize = 8;
 
 impl Expander {
     /// Builds the tables for `geometry` (allocates; do it once per sensor).
@@ -91,6 +104,10 @@ impl Expander {
             window_tab,
             window_inside,
             wrap_shifts,
+            depth: Vec::with_capacity(n),
+            stop_left: vec![0; n],
+            stop_right: vec![0; n],
+            stack: Vec::with_capacity(n),
             order: Vec::with_capacity(n),
             bins: vec![0; DEPTH_BINS + 1],
             block_max: vec![0.0; n.div_ceil(BLOCK)],
@@ -117,7 +134,11 @@ impl Expander {
             };
         }
         let out = &mut out[..n];
-        self.order_hits_by_depth(scan, n);
+        self.read_depths(scan, n);
+        let wraps = !self.wrap_shifts.is_empty();
+        if !wraps {
+            self.find_stops();
+        }
         for (b, chunk) in self.block_max.iter_mut().zip(out.chunks(BLOCK)) {
             *b = chunk.iter().copied().fold(0.0, f64::max);
         }
@@ -125,9 +146,7 @@ impl Expander {
         let inv_r = if r > 0.0 { 1.0 / r } else { f64::INFINITY };
         for oi in 0..self.order.len() {
             let j = self.order[oi] as usize;
-            let d = scan.ranges_m[j];
-            // No entry into this disc is nearer than d - r.
-            let floor = d - r;
+            let d = self.depth[j];
             let half = if d <= r {
                 self.window_inside
             } else {
@@ -135,44 +154,38 @@ impl Expander {
                 let bin = (WINDOW_BINS as f64 / (d * inv_r)) as usize;
                 self.window_tab[bin.min(WINDOW_BINS - 1)]
             };
-            let centre = j as f64;
-            self.visit(out, j, d, r2, floor, centre, half);
-            for s in 0..self.wrap_shifts.len() {
-                let shift = self.wrap_shifts[s];
-                self.visit(out, j, d, r2, floor, centre + shift, half);
+            if !wraps {
+                let lo = j.saturating_sub(half).max(self.stop_left[j] as usize);
+                let hi = (j + half).min(self.stop_right[j] as usize - 1);
+                self.visit(out, j, d, r2, lo, hi);
+                continue;
+            }
+            for s in 0..=self.wrap_shifts.len() {
+                let centre = j as f64 + if s == 0 { 0.0 } else { self.wrap_shifts[s - 1] };
+                let (lo, hi) = (centre - half as f64, centre + half as f64);
+                if hi < 0.0 || lo > (n - 1) as f64 {
+                    continue;
+                }
+                let lo = lo.max(0.0).ceil() as usize;
+                let hi = (hi.min((n - 1) as f64).floor() as usize).min(n - 1);
+                self.visit(out, j, d, r2, lo, hi);
             }
         }
     }
 
-    /// Applies disc `j` (range `d`) to the rays within `half` rays of index `centre`.
-    #[allow(clippy::too_many_arguments)]
+    /// Applies disc `j` (range `d`) to rays `lo..=hi`.
     #[inline]
-    fn visit(
-        &mut self,
-        out: &mut [f64],
-        j: usize,
-        d: f64,
-        r2: f64,
-        floor: f64,
-        centre: f64,
-        half: usize,
-    ) {
-        let n = out.len();
-        let lo = centre - half as f64;
-        let hi = centre + half as f64;
-        if hi < 0.0 || lo > (n - 1) as f64 {
-            return;
-        }
-        let lo = lo.max(0.0).ceil() as usize;
-        let hi = (hi.min((n - 1) as f64).floor() as usize).min(n - 1);
+    fn visit(&mut self, out: &mut [f64], j: usize, d: f64, r2: f64, lo: usize, hi: usize) {
         if lo > hi {
             return;
         }
+        // No entry into this disc is nearer than d - r (nor than 0).
+        let floor = (d - r2.sqrt()).max(0.0);
         let d2 = d * d;
-        let (b_lo, b_hi) = (lo / BLOCK, hi / BLOCK);
-        for b in b_lo..=b_hi {
+        let n = out.len();
+        for b in lo / BLOCK..=hi / BLOCK {
             if self.block_max[b] <= floor {
-                continue; // every ray of the block is already blocked nearer than d - r
+                continue; // every ray of the block is already blocked nearer than that
             }
             let start = (b * BLOCK).max(lo);
             let end = ((b + 1) * BLOCK).min(hi + 1);
@@ -180,42 +193,79 @@ impl Expander {
                 let m = k.abs_diff(j);
                 let tm = d * self.cos_tab[m];
                 let disc = r2 - d2 * self.sin2_tab[m];
-                if disc >= 0.0 && tm > 0.0 {
-                    let entry = (tm - disc.sqrt()).max(0.0);
-                    if entry < *slot {
-                        *slot = entry;
-                    }
-                }
+                // Branch-free: a miss (or a disc behind) gives +inf.
+                let entry = if disc >= 0.0 && tm > 0.0 {
+                    (tm - disc.sqrt()).max(0.0)
+                } else {
+                    f64::INFINITY
+                };
+                *slot = slot.min(entry);
             }
             let block = &out[b * BLOCK..((b + 1) * BLOCK).min(n)];
-            let block_max = block.iter().copied().fold(0.0, f64::max);
-            self.block_max[b] = block_max;
+            self.block_max[b] = block.iter().copied().fold(0.0, f64::max);
         }
     }
 
-    /// Fills `self.order` with the indices of the obstacle rays, nearest depth bin first.
-    fn order_hits_by_depth(&mut self, scan: &Scan, n: usize) {
+    /// Reads each ray's obstacle range into `depth` and orders the obstacle rays by depth bin.
+    fn read_depths(&mut self, scan: &Scan, n: usize) {
         let scale = DEPTH_BINS as f64 / self.geometry.max_range_m;
         let bin_of = |d: f64| ((d * scale) as usize).min(DEPTH_BINS - 1);
+        self.depth.clear();
         self.bins.iter_mut().for_each(|c| *c = 0);
-        let mut hits = 0usize;
         for i in 0..n {
-            if let Some(d) = obstacle_range_m(scan, i) {
+            // A hit at range 0 never blocks (no ray leads toward it): not an obstacle here.
+            let d = obstacle_range_m(scan, i).filter(|&d| d > 0.0);
+            if let Some(d) = d {
                 self.bins[bin_of(d) + 1] += 1;
-                hits += 1;
             }
+            self.depth.push(d.unwrap_or(f64::INFINITY));
         }
         for b in 1..=DEPTH_BINS {
             self.bins[b] += self.bins[b - 1];
         }
         self.order.clear();
-        self.order.resize(hits, 0);
-        for i in 0..n {
-            if let Some(d) = obstacle_range_m(scan, i) {
+        self.order.resize(self.bins[DEPTH_BINS] as usize, 0);
+        for (i, &d) in self.depth.iter().enumerate() {
+            if d.is_finite() {
                 let b = bin_of(d);
                 self.order[self.bins[b] as usize] = i as u32;
                 self.bins[b] += 1;
             }
+        }
+    }
+
+    /// For every ray, the nearest ray on each side that is at least as near.
+    fn find_stops(&mut self) {
+        let n = self.depth.len();
+        self.stack.clear();
+        for i in 0..n {
+            while let Some(&t) = self.stack.last() {
+                if self.depth[i] <= self.depth[t as usize] {
+                    self.stop_right[t as usize] = i as u32;
+                    self.stack.pop();
+                } else {
+                    break;
+                }
+            }
+            self.stack.push(i as u32);
+        }
+        for &t in &self.stack {
+            self.stop_right[t as usize] = n as u32;
+        }
+        self.stack.clear();
+        for i in (0..n).rev() {
+            while let Some(&t) = self.stack.last() {
+                if self.depth[i] <= self.depth[t as usize] {
+                    self.stop_left[t as usize] = i as u32 + 1;
+                    self.stack.pop();
+                } else {
+                    break;
+                }
+            }
+            self.stack.push(i as u32);
+        }
+        for &t in &self.stack {
+            self.stop_left[t as usize] = 0;
         }
     }
 }

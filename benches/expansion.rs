@@ -1,0 +1,193 @@
+//! Obstacle expansion: the reference kernel (paper eqs. 1-5, every hit against every ray)
+//! against the fast kernel, at 685 (paper), 1081 (UTM-30LX) and 1440 rays, r = 0.3 m, on
+//! scans of the paper's world and on random scans.
+//!
+//! The paper's world is `../shared/worlds/stage/cave.png` at 10 m x 10 m with a boundary
+//! wall (see its MANIFEST). Scans of it are cast here by an exact grid traversal of the
+//! bitmap (dark pixels are obstacles), from the paper's start pose and a few more poses.
+//!
+//! Run: `cargo bench --bench expansion` (add `-- --quick` for a short run).
+
+use std::hint::black_box;
+use std::path::PathBuf;
+
+use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
+use expansion::{Expander, clearances_reference};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use scan_types::{Scan, ScanGeometry};
+
+const RADIUS_M: f64 = 0.3;
+
+/// The three sensors: (label, geometry).
+fn sensors() -> Vec<(&'static str, ScanGeometry)> {
+    vec![
+        ("685", ScanGeometry::paper()),
+        // UTM-30LX: 270 deg at 0.25 deg, 30 m.
+        (
+            "1081",
+            ScanGeometry::centred(1081, 270f64.to_radians(), 0.1, 30.0).unwrap(),
+        ),
+        // A full-turn scanner at 0.25 deg, 4 m (exercises the wrap-around windows).
+        (
+            "1440",
+            ScanGeometry::new(-std::f64::consts::PI, 0.25f64.to_radians(), 1440, 0.0, 4.0).unwrap(),
+        ),
+    ]
+}
+
+/// cave.png as an occupancy bitmap, 0.02 m per pixel, centred on the origin.
+struct Bitmap {
+    width: usize,
+    height: usize,
+    dark: Vec<bool>,
+    cell_m: f64,
+}
+
+impl Bitmap {
+    fn load() -> Option<Bitmap> {
+        let path = PathBuf::from(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../shared/worlds/stage/cave.png"
+        ));
+        let img = image::open(&path).ok()?.to_luma8();
+        let (w, h) = (img.width() as usize, img.height() as usize);
+        let dark = img.pixels().map(|p| p.0[0] < 128).collect();
+        Some(Bitmap {
+            width: w,
+            height: h,
+            dark,
+            cell_m: 10.0 / w as f64,
+        })
+    }
+
+    /// Obstacle at cell (cx, cy) (cy = 0 at the bottom); outside the image is the boundary wall.
+    fn occupied(&self, cx: i64, cy: i64) -> bool {
+        if cx < 0 || cy < 0 || cx >= self.width as i64 || cy >= self.height as i64 {
+            return true;
+        }
+        let row = self.height - 1 - cy as usize;
+        self.dark[row * self.width + cx as usize]
+    }
+
+    /// Exact distance from (x, y) along `angle` to the first dark cell (grid traversal).
+    fn raycast(&self, x: f64, y: f64, angle: f64, max_m: f64) -> Option<f64> {
+        let half = self.width as f64 * self.cell_m / 2.0;
+        let (gx, gy) = ((x + half) / self.cell_m, (y + half) / self.cell_m);
+        let (dx, dy) = (angle.cos(), angle.sin());
+        let (mut cx, mut cy) = (gx.floor() as i64, gy.floor() as i64);
+        let step_x = if dx > 0.0 { 1 } else { -1 };
+        let step_y = if dy > 0.0 { 1 } else { -1 };
+        let next = |g: f64, c: i64, d: f64| {
+            if d > 0.0 {
+                (c as f64 + 1.0 - g) / d
+            } else if d < 0.0 {
+                (g - c as f64) / -d
+            } else {
+                f64::INFINITY
+            }
+        };
+        let (mut tx, mut ty) = (next(gx, cx, dx), next(gy, cy, dy));
+        let (ddx, ddy) = (1.0 / dx.abs(), 1.0 / dy.abs());
+        let max_cells = max_m / self.cell_m;
+        loop {
+            let t = if tx < ty {
+                cx += step_x;
+                let t = tx;
+                tx += ddx;
+                t
+            } else {
+                cy += step_y;
+                let t = ty;
+                ty += ddy;
+                t
+            };
+            if t > max_cells {
+                return None;
+            }
+            if self.occupied(cx, cy) {
+                return Some(t * self.cell_m);
+            }
+        }
+    }
+
+    fn scan(&self, g: &ScanGeometry, x: f64, y: f64, heading: f64) -> Scan {
+        let ranges: Vec<f64> = (0..g.ray_count)
+            .map(|i| {
+                self.raycast(x, y, heading + g.bearing_rad(i), g.max_range_m)
+                    .unwrap_or(g.max_range_m)
+            })
+            .collect();
+        Scan::from_ranges(g, &ranges, 0.0)
+    }
+}
+
+/// Poses in free space of the paper's world (each at least 0.45 m from any obstacle): the
+/// paper's start, its point B, and points spread over the world.
+const POSES: [(f64, f64, f64); 6] = [
+    (-3.92, -4.26, 0.785),
+    (-2.09, -2.34, 0.9),
+    (-1.0, 2.0, 0.3),
+    (3.5, -1.0, 1.2),
+    (2.0, 3.0, 0.6),
+    (4.0, 4.0, -2.4),
+];
+
+fn random_scans(g: &ScanGeometry, count: usize, seed: u64) -> Vec<Scan> {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    (0..count)
+        .map(|_| {
+            let ranges: Vec<f64> = (0..g.ray_count)
+                .map(|_| match rng.random_range(0..20) {
+                    0 => f64::NAN,
+                    1..=4 => g.max_range_m,
+                    _ => rng.random_range(0.3..g.max_range_m),
+                })
+                .collect();
+            Scan::from_ranges(g, &ranges, 0.0)
+        })
+        .collect()
+}
+
+fn bench_expansion(c: &mut Criterion) {
+    let bitmap = Bitmap::load();
+    if bitmap.is_none() {
+        eprintln!("note: ../shared/worlds/stage/cave.png not found; paper-world benches skipped");
+    }
+    for (label, g) in sensors() {
+        let mut sets: Vec<(&str, Vec<Scan>)> = vec![("random", random_scans(&g, 4, 7))];
+        if let Some(bm) = &bitmap {
+            let scans = POSES
+                .iter()
+                .map(|&(x, y, h)| bm.scan(&g, x, y, h))
+                .collect();
+            sets.push(("paper_world", scans));
+        }
+        for (world, scans) in &sets {
+            let mut group = c.benchmark_group(format!("expansion/{world}"));
+            let mut out = vec![0.0; g.ray_count];
+            let mut expander = Expander::new(&g);
+            // One iteration = one scan (cycling through the set).
+            group.bench_with_input(BenchmarkId::new("fast", label), scans, |b, scans| {
+                let mut k = 0;
+                b.iter(|| {
+                    k = (k + 1) % scans.len();
+                    expander.clearances(black_box(&scans[k]), RADIUS_M, &mut out);
+                    black_box(out[0])
+                })
+            });
+            group.bench_with_input(BenchmarkId::new("reference", label), scans, |b, scans| {
+                let mut k = 0;
+                b.iter(|| {
+                    k = (k + 1) % scans.len();
+                    clearances_reference(&g, black_box(&scans[k]), RADIUS_M, &mut out);
+                    black_box(out[0])
+                })
+            });
+            group.finish();
+        }
+    }
+}
+
+criterion_group!(benches, bench_expansion);
+criterion_main!(benches);
