@@ -11,16 +11,20 @@ pub struct SelectParams {
     pub min_ahead_m: f64,
     /// Skip landmarks whose stability score is below this.
     pub min_score: f64,
+    /// Skip landmarks closer to the path than this (`range |sin bearing|` = CB), metres: the
+    /// robot cannot pass a landmark nearer than its radius.
+    pub min_lateral_m: f64,
 }
 
 impl Default for SelectParams {
-    /// goalseek: within 90 deg, at least 0.2 m ahead, only unflagged landmarks (score 1
-    /// needs a clean feature; flagged ones score 0.3 or less).
+    /// goalseek: within 90 deg, at least 0.2 m ahead, at least 0.4 m beside the path (robot
+    /// radius 0.3 m plus a margin), no stability flag raised (a flag scores 0.3 or less).
     fn default() -> Self {
         Self {
             max_bearing_rad: std::f64::consts::FRAC_PI_2,
             min_ahead_m: 0.2,
             min_score: 0.4,
+            min_lateral_m: 0.4,
         }
     }
 }
@@ -32,6 +36,7 @@ impl SelectParams {
             max_bearing_rad: std::f64::consts::FRAC_PI_2,
             min_ahead_m: 0.0,
             min_score: 0.0,
+            min_lateral_m: 0.0,
         }
     }
 }
@@ -70,7 +75,9 @@ pub fn select(landmarks: &[Landmark], params: &SelectParams) -> Option<Landmark>
     let ok: Vec<Landmark> = landmarks
         .iter()
         .filter(|l| {
-            l.score >= params.min_score && l.range_m * l.bearing_rad.cos() >= params.min_ahead_m
+            l.score >= params.min_score
+                && l.range_m * l.bearing_rad.cos() >= params.min_ahead_m
+                && l.range_m * l.bearing_rad.sin().abs() >= params.min_lateral_m
         })
         .copied()
         .collect();
