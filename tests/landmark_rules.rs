@@ -219,3 +219,69 @@ fn each_rule_on_leg_error() {
         "goalseek p95 {ours_p95} vs paper {paper_p95}"
     );
 }
+
+/// The paper's first scan (section 4: "six landmarks"): from (-3.92, -4.26) facing the target
+/// (4, 4), noise off. Prints every landmark of the paper's rule with its flags.
+#[test]
+fn paper_first_scan() {
+    let world = Arc::new(World::paper());
+    let theta = (4.0f64 + 4.26).atan2(4.0 + 3.92);
+    let start = Pose2::new(-3.92, -4.26, theta);
+    let sim = Simulation::new(
+        world,
+        SensorPreset::Paper,
+        sim_laser::LaserNoise::off(),
+        sim_laser::MotionNoise::off(),
+        0.3,
+        start,
+        1,
+    );
+    let (mut laser, _base, _truth) = sim.split();
+    let g = *laser.geometry();
+    let scan = laser.next_scan().unwrap();
+    let paper = detect(&g, &scan, &DetectParams::paper());
+    let ours = detect(&g, &scan, &DetectParams::default());
+    for l in &paper {
+        let w = start.transform_point(l.robot_point());
+        println!(
+            "paper rule: ({:6.2}, {:6.2}) range {:.2} m bearing {:6.1} deg near_range_limit {} surface_continues {}",
+            w.x_m(),
+            w.y_m(),
+            l.range_m,
+            l.bearing_rad.to_degrees(),
+            l.near_range_limit,
+            l.surface_continues
+        );
+    }
+    for l in &ours {
+        let w = start.transform_point(l.robot_point());
+        println!(
+            "goalseek: {:?} ({:6.2}, {:6.2}) range {:.2} m bearing {:6.1} deg score {:.2}",
+            l.kind,
+            w.x_m(),
+            w.y_m(),
+            l.range_m,
+            l.bearing_rad.to_degrees(),
+            l.score
+        );
+    }
+    // The paper: six landmarks in this scan, the nearest at (-2.38, -2.06); the prototype:
+    // four of the six are range-limit hits.
+    assert_eq!(paper.len(), 6);
+    assert_eq!(paper.iter().filter(|l| l.near_range_limit).count(), 4);
+    let nearest = landmarks::select_nearest(&paper, std::f64::consts::FRAC_PI_2).unwrap();
+    let w = start.transform_point(nearest.robot_point());
+    assert!(w.distance_m(&WorldPoint::new(-2.38, -2.06)) < 0.05, "{w:?}");
+    // Every landmark goalseek keeps is off the range limit.
+    assert!(
+        ours.iter()
+            .all(|l| !l.near_range_limit && !l.surface_continues)
+    );
+    // Every paper landmark within the range-limit band is flagged.
+    assert!(
+        paper
+            .iter()
+            .filter(|l| l.range_m >= g.max_range_m - 0.1)
+            .all(|l| l.near_range_limit)
+    );
+}
