@@ -1,12 +1,116 @@
-//! `robot-app emulate`: under construction.
+//! `robot-app emulate`: serves an emulated SCIP 2.0 Hokuyo on a pseudo-terminal.
 
+use std::io::{Read, Write};
+use std::path::PathBuf;
+
+use anyhow::Context;
 use clap::Args;
+use urg_driver::{FixedSource, Model, Profile, PtyServer, emulator};
 
 /// Arguments of `robot-app emulate`.
 #[derive(Debug, Args)]
-pub struct EmulateArgs {}
+pub struct EmulateArgs {
+    /// Sensor model: urg-04lx or utm-30lx.
+    #[arg(long, default_value = "urg-04lx", value_parser = parse_model)]
+    pub model: Model,
+    /// Start in SCIP 1.1, as a factory URG-04LX does (clients must send SCIP2.0).
+    #[arg(long)]
+    pub scip1: bool,
+    /// Take ranges from the simulator (a robot standing at --pose) instead of the fixed scan.
+    #[arg(long)]
+    pub sim: bool,
+    /// World file for --sim (.toml, .yaml, .png); default: the paper's world.
+    #[arg(long, requires = "sim")]
+    pub world: Option<PathBuf>,
+    /// Robot pose for --sim: X,Y,THETA_DEG (default: the paper's start).
+    #[arg(long, requires = "sim", allow_hyphen_values = true)]
+    pub pose: Option<String>,
+    /// Seed of the simulated laser noise.
+    #[arg(long, default_value_t = 0, requires = "sim")]
+    pub seed: u64,
+    /// Simulated laser noise on or off.
+    #[arg(long, default_value = "on", value_parser = ["on", "off"], requires = "sim")]
+    pub noise: String,
+    /// Do not stop at end of standard input; serve until killed (for background use).
+    #[arg(long)]
+    pub no_stdin: bool,
+}
 
-/// Runs `robot-app emulate`.
-pub fn run(_args: EmulateArgs) -> anyhow::Result<()> {
-    anyhow::bail!("'robot-app emulate' is not implemented yet")
+fn parse_model(s: &str) -> Result<Model, String> {
+    s.parse()
+}
+
+fn model_name(m: Model) -> &'static str {
+    match m {
+        Model::Urg04lx => "urg-04lx",
+        Model::Utm30lx => "utm-30lx",
+    }
+}
+
+/// Starts the emulator described by `args` (the caller keeps it alive).
+pub fn start(args: &EmulateArgs) -> anyhow::Result<PtyServer> {
+    let mut profile = Profile::of(args.model);
+    profile.scip1_at_power_up = args.scip1;
+    let server = if args.sim {
+        let pose = match &args.pose {
+            Some(p) => crate::simsetup::parse_pose(p)?,
+            None => crate::simsetup::paper_start(),
+        };
+        let source = crate::simsetup::sim_scan_source(
+            args.world.as_deref(),
+            pose,
+            model_name(args.model),
+            args.seed,
+            args.noise == "on",
+        )?;
+        emulator::serve_pty_with(urg_driver::SensorCore::new(
+            profile,
+            source,
+            Default::default(),
+        ))
+    } else {
+        let source = FixedSource::room(profile.params.geometry());
+        emulator::serve_pty_with(urg_driver::SensorCore::new(
+            profile,
+            source,
+            Default::default(),
+        ))
+    };
+    server.context("opening a pseudo-terminal")
+}
+
+/// Runs `robot-app emulate`: prints the device path and serves until Ctrl-C or end of stdin.
+pub fn run(args: EmulateArgs) -> anyhow::Result<()> {
+    let server = start(&args)?;
+    {
+        let mut out = std::io::stdout().lock();
+        writeln!(out, "{}", server.path())?;
+        out.flush()?;
+    }
+    tracing::info!(
+        "emulated {} on {} ({}); stop with Ctrl-C{}",
+        model_name(args.model),
+        server.path(),
+        if args.sim {
+            "simulated ranges"
+        } else {
+            "fixed scan"
+        },
+        if args.no_stdin {
+            ""
+        } else {
+            " or end of input"
+        }
+    );
+    if args.no_stdin {
+        loop {
+            std::thread::park();
+        }
+    }
+    let mut sink = [0u8; 256];
+    let mut stdin = std::io::stdin().lock();
+    while stdin.read(&mut sink).map(|n| n > 0).unwrap_or(false) {}
+    tracing::info!("end of input: stopping the emulator");
+    server.stop();
+    Ok(())
 }
