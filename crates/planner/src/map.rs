@@ -1,0 +1,370 @@
+//! The planner's own obstacle memory (a coarse grid of world-frame hits, inflated by the robot
+//! radius and a margin, unknown = free) and the path-length field toward the target over it.
+
+use scan_types::WorldPoint;
+
+/// Extra room kept around everything the grid must hold, metres.
+const GROW_MARGIN_M: f64 = 2.0;
+/// Step costs of the wavefront: straight 10, diagonal 14 (units of a tenth of a cell).
+const STRAIGHT: u32 = 10;
+const DIAGONAL: u32 = 14;
+/// "No path".
+const UNREACHED: u32 = u32::MAX;
+
+/// Hits remembered on a coarse grid, and the path length of every cell to a target.
+#[derive(Debug, Clone)]
+pub struct ObstacleMemory {
+    resolution_m: f64,
+    inflate_m: f64,
+    /// World coordinates of the lower-left corner of cell (0, 0).
+    origin: (f64, f64),
+    width: usize,
+    height: usize,
+    /// Hits seen in each cell (saturating).
+    hits: Vec<u16>,
+    /// How many hit cells lie within the inflation radius of each cell (> 0: blocked).
+    blocked: Vec<u16>,
+    /// Cell offsets within the inflation radius.
+    stamp: Vec<(i32, i32)>,
+    /// Bumped whenever the set of blocked cells changes.
+    version: u64,
+    /// The path-length field (tenths of a cell) and what it was computed for.
+    field: Vec<u32>,
+    field_key: Option<(u64, usize)>,
+    /// Scratch of the wavefront: one bucket per cost modulo the bucket count.
+    buckets: Vec<Vec<u32>>,
+}
+
+impl ObstacleMemory {
+    /// An empty memory with cells of `resolution_m` and obstacles grown by `inflate_m`.
+    pub fn new(resolution_m: f64, inflate_m: f64) -> Self {
+        let reach = (inflate_m / resolution_m).floor() as i32;
+        let mut stamp = Vec::new();
+        for dy in -reach..=reach {
+            for dx in -reach..=reach {
+                let dist = ((dx * dx + dy * dy) as f64).sqrt() * resolution_m;
+                if dist <= inflate_m {
+                    stamp.push((dx, dy));
+                }
+            }
+        }
+        Self {
+            resolution_m,
+            inflate_m,
+            origin: (0.0, 0.0),
+            width: 0,
+            height: 0,
+            hits: Vec::new(),
+            blocked: Vec::new(),
+            stamp,
+            version: 0,
+            field: Vec::new(),
+            field_key: None,
+            buckets: vec![Vec::new(); (DIAGONAL + 1) as usize],
+        }
+    }
+
+    /// Cell size, metres.
+    pub fn resolution_m(&self) -> f64 {
+        self.resolution_m
+    }
+
+    /// Number of cells holding at least one hit.
+    pub fn hit_cells(&self) -> usize {
+        self.hits.iter().filter(|&&h| h > 0).count()
+    }
+
+    /// True when `p` lies within the inflation radius of a remembered hit.
+    pub fn is_blocked(&self, p: WorldPoint) -> bool {
+        self.cell_of(p).is_some_and(|c| self.blocked[c] > 0)
+    }
+
+    /// Remembers a world-frame hit point.
+    pub fn add_hit(&mut self, p: WorldPoint) {
+        if !(p.x_m().is_finite() && p.y_m().is_finite()) {
+            return;
+        }
+        self.ensure_contains(p);
+        let Some(c) = self.cell_of(p) else { return };
+        if self.hits[c] == 0 {
+            self.stamp_cell(c);
+            self.version += 1;
+        }
+        self.hits[c] = self.hits[c].saturating_add(1);
+    }
+
+    /// Grows the grid (keeping its content) so that `p` lies inside with room around it.
+    pub fn ensure_contains(&mut self, p: WorldPoint) {
+        let (x, y) = (p.x_m(), p.y_m());
+        if !(x.is_finite() && y.is_finite()) {
+            return;
+        }
+        let inside = |v: f64, lo: f64, cells: usize| {
+            v - self.inflate_m - 1.0 >= lo
+                && v + self.inflate_m + 1.0 < lo + cells as f64 * self.resolution_m
+        };
+        if self.width > 0
+            && inside(x, self.origin.0, self.width)
+            && inside(y, self.origin.1, self.height)
+        {
+            return;
+        }
+        let res = self.resolution_m;
+        let (mut x0, mut y0, mut x1, mut y1) = if self.width == 0 {
+            (x, y, x, y)
+        } else {
+            (
+                self.origin.0,
+                self.origin.1,
+                self.origin.0 + self.width as f64 * res,
+                self.origin.1 + self.height as f64 * res,
+            )
+        };
+        x0 = x0.min(x - GROW_MARGIN_M);
+        y0 = y0.min(y - GROW_MARGIN_M);
+        x1 = x1.max(x + GROW_MARGIN_M);
+        y1 = y1.max(y + GROW_MARGIN_M);
+        // Keep cell boundaries aligned with the old grid.
+        let (ox, oy) = if self.width == 0 {
+            ((x0 / res).floor() * res, (y0 / res).floor() * res)
+        } else {
+            (
+                self.origin.0 - ((self.origin.0 - x0) / res).ceil() * res,
+                self.origin.1 - ((self.origin.1 - y0) / res).ceil() * res,
+            )
+        };
+        let w = ((x1 - ox) / res).ceil() as usize + 1;
+        let h = ((y1 - oy) / res).ceil() as usize + 1;
+        let dx = ((self.origin.0 - ox) / res).round() as usize;
+        let dy = ((self.origin.1 - oy) / res).round() as usize;
+        let mut hits = vec![0u16; w * h];
+        for row in 0..self.height {
+            for col in 0..self.width {
+                hits[(row + dy) * w + col + dx] = self.hits[row * self.width + col];
+            }
+        }
+        self.origin = (ox, oy);
+        self.width = w;
+        self.height = h;
+        self.hits = hits;
+        self.blocked = vec![0; w * h];
+        for c in 0..w * h {
+            if self.hits[c] > 0 {
+                self.stamp_cell(c);
+            }
+        }
+        self.version += 1;
+    }
+
+    fn stamp_cell(&mut self, c: usize) {
+        let (col, row) = ((c % self.width) as i32, (c / self.width) as i32);
+        for &(dx, dy) in &self.stamp {
+            let (x, y) = (col + dx, row + dy);
+            if x >= 0 && y >= 0 && (x as usize) < self.width && (y as usize) < self.height {
+                let k = y as usize * self.width + x as usize;
+                self.blocked[k] = self.blocked[k].saturating_add(1);
+            }
+        }
+    }
+
+    fn cell_of(&self, p: WorldPoint) -> Option<usize> {
+        let fx = ((p.x_m() - self.origin.0) / self.resolution_m).floor();
+        let fy = ((p.y_m() - self.origin.1) / self.resolution_m).floor();
+        if fx >= 0.0 && fy >= 0.0 && fx < self.width as f64 && fy < self.height as f64 {
+            Some(fy as usize * self.width + fx as usize)
+        } else {
+            None
+        }
+    }
+
+    fn centre_of(&self, c: usize) -> (f64, f64) {
+        (
+            self.origin.0 + ((c % self.width) as f64 + 0.5) * self.resolution_m,
+            self.origin.1 + ((c / self.width) as f64 + 0.5) * self.resolution_m,
+        )
+    }
+
+    /// Computes the path-length field to `target` unless it is current; true when recomputed.
+    pub fn update_field(&mut self, target: WorldPoint) -> bool {
+        self.ensure_contains(target);
+        let Some(tc) = self.cell_of(target) else {
+            return false;
+        };
+        if self.field_key == Some((self.version, tc)) {
+            return false;
+        }
+        let n = self.width * self.height;
+        self.field.clear();
+        self.field.resize(n, UNREACHED);
+        for b in &mut self.buckets {
+            b.clear();
+        }
+        // Seed: the target cell, and when it is blocked (the target close to a wall) the free
+        // cells within the inflation radius of it, at their straight-line cost.
+        let reach = (self.inflate_m / self.resolution_m).ceil() as i32 + 1;
+        let (tcol, trow) = ((tc % self.width) as i32, (tc / self.width) as i32);
+        self.field[tc] = 0;
+        self.buckets[0].push(tc as u32);
+        if self.blocked[tc] > 0 {
+            for dy in -reach..=reach {
+                for dx in -reach..=reach {
+                    let (x, y) = (tcol + dx, trow + dy);
+                    if x < 0 || y < 0 || x as usize >= self.width || y as usize >= self.height {
+                        continue;
+                    }
+                    let k = y as usize * self.width + x as usize;
+                    if self.blocked[k] == 0 {
+                        let cost = (((dx * dx + dy * dy) as f64).sqrt() * STRAIGHT as f64) as u32;
+                        if cost < self.field[k] {
+                            self.field[k] = cost;
+                            let nb = self.buckets.len();
+                            self.buckets[cost as usize % nb].push(k as u32);
+                        }
+                    }
+                }
+            }
+        }
+        self.wavefront();
+        self.field_key = Some((self.version, tc));
+        true
+    }
+
+    /// Dial's shortest paths over free cells (8-connected), from the seeded buckets.
+    fn wavefront(&mut self) {
+        let nb = self.buckets.len();
+        let (w, h) = (self.width as i64, self.height as i64);
+        let steps: [(i64, i64, u32); 8] = [
+            (1, 0, STRAIGHT),
+            (-1, 0, STRAIGHT),
+            (0, 1, STRAIGHT),
+            (0, -1, STRAIGHT),
+            (1, 1, DIAGONAL),
+            (1, -1, DIAGONAL),
+            (-1, 1, DIAGONAL),
+            (-1, -1, DIAGONAL),
+        ];
+        let mut cost: u32 = 0;
+        let mut empty_run = 0;
+        let mut popped = Vec::new();
+        while empty_run < nb {
+            let slot = cost as usize % nb;
+            if self.buckets[slot].is_empty() {
+                empty_run += 1;
+                cost += 1;
+                continue;
+            }
+            empty_run = 0;
+            std::mem::swap(&mut popped, &mut self.buckets[slot]);
+            for &c in &popped {
+                let c = c as usize;
+                if self.field[c] != cost {
+                    continue; // a stale entry
+                }
+                let (x, y) = ((c % self.width) as i64, (c / self.width) as i64);
+                for &(dx, dy, step) in &steps {
+                    let (nx, ny) = (x + dx, y + dy);
+                    if nx < 0 || ny < 0 || nx >= w || ny >= h {
+                        continue;
+                    }
+                    let k = (ny * w + nx) as usize;
+                    if self.blocked[k] > 0 {
+                        continue;
+                    }
+                    // No cutting corners between two blocked cells.
+                    if dx != 0
+                        && dy != 0
+                        && (self.blocked[(y * w + nx) as usize] > 0
+                            || self.blocked[(ny * w + x) as usize] > 0)
+                    {
+                        continue;
+                    }
+                    let nc = cost + step;
+                    if nc < self.field[k] {
+                        self.field[k] = nc;
+                        self.buckets[nc as usize % nb].push(k as u32);
+                    }
+                }
+            }
+            popped.clear();
+            cost += 1;
+        }
+    }
+
+    /// Path length from `p` to the target of the last field, metres; `None` when no path is
+    /// known. A point in a blocked cell (right at the edge of an obstacle) takes the best free
+    /// cell next to it plus the straight distance to that cell's centre.
+    pub fn path_length_m(&self, p: WorldPoint) -> Option<f64> {
+        let c = self.cell_of(p)?;
+        let to_m = self.resolution_m / STRAIGHT as f64;
+        if self.field[c] != UNREACHED && self.blocked[c] == 0 {
+            return Some(self.field[c] as f64 * to_m);
+        }
+        let (col, row) = ((c % self.width) as i64, (c / self.width) as i64);
+        let mut best: Option<f64> = None;
+        for dy in -2..=2i64 {
+            for dx in -2..=2i64 {
+                let (x, y) = (col + dx, row + dy);
+                if x < 0 || y < 0 || x >= self.width as i64 || y >= self.height as i64 {
+                    continue;
+                }
+                let k = (y * self.width as i64 + x) as usize;
+                if self.field[k] == UNREACHED {
+                    continue;
+                }
+                let (cx, cy) = self.centre_of(k);
+                let v = self.field[k] as f64 * to_m + (cx - p.x_m()).hypot(cy - p.y_m());
+                best = Some(best.map_or(v, |b: f64| b.min(v)));
+            }
+        }
+        best
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn free_space_path_is_octile_distance() {
+        let mut m = ObstacleMemory::new(0.1, 0.4);
+        m.ensure_contains(WorldPoint::new(0.0, 0.0));
+        m.update_field(WorldPoint::new(0.05, 0.05));
+        // 1 m straight along x: 10 cells.
+        let d = m.path_length_m(WorldPoint::new(1.05, 0.05)).unwrap();
+        assert!((d - 1.0).abs() < 1e-9, "{d}");
+        // 0.5 m diagonal: 5 diagonal steps of 1.4 cells.
+        let d = m.path_length_m(WorldPoint::new(0.55, 0.55)).unwrap();
+        assert!((d - 0.7).abs() < 1e-9, "{d}");
+    }
+
+    #[test]
+    fn a_wall_forces_a_detour() {
+        let mut m = ObstacleMemory::new(0.1, 0.3);
+        // A wall along y = 0 from x = -2 to x = 2.
+        for i in -40..=40 {
+            m.add_hit(WorldPoint::new(i as f64 * 0.05, 0.0));
+        }
+        m.update_field(WorldPoint::new(0.0, 1.0));
+        let through = m.path_length_m(WorldPoint::new(0.0, -1.0)).unwrap();
+        // Around an end: at least 2 * sqrt(2^2 + 1^2) = 4.47 m.
+        assert!(through > 4.4, "{through}");
+        assert!(m.is_blocked(WorldPoint::new(0.0, 0.2)));
+        assert!(!m.is_blocked(WorldPoint::new(0.0, 0.5)));
+        // Unchanged memory and target: no recomputation.
+        assert!(!m.update_field(WorldPoint::new(0.0, 1.0)));
+        m.add_hit(WorldPoint::new(5.0, 5.0));
+        assert!(m.update_field(WorldPoint::new(0.0, 1.0)));
+    }
+
+    #[test]
+    fn enclosed_target_has_no_path() {
+        let mut m = ObstacleMemory::new(0.1, 0.2);
+        for k in 0..400 {
+            let a = k as f64 / 400.0 * std::f64::consts::TAU;
+            m.add_hit(WorldPoint::new(1.5 * a.cos(), 1.5 * a.sin()));
+        }
+        m.update_field(WorldPoint::new(0.0, 0.0));
+        assert!(m.path_length_m(WorldPoint::new(3.0, 0.0)).is_none());
+        assert!(m.path_length_m(WorldPoint::new(0.5, 0.0)).is_some());
+    }
+}
