@@ -439,8 +439,16 @@ pub fn open_serial(path: &str) -> io::Result<SerialTransport> {
 impl Urg<SerialTransport> {
     /// Opens the serial device at `path` and connects.
     pub fn open(path: &str, config: UrgConfig) -> Result<Self, UrgError> {
-        let io = open_serial(path)
-            .map_err(|e| UrgError::Disconnected(format!("cannot open {path}: {e}")))?;
+        let io = open_serial(path).map_err(|e| {
+            if crate::port::is_disconnect(&e) {
+                UrgError::Disconnected(format!("cannot open {path}: {e}"))
+            } else {
+                UrgError::Io(std::io::Error::new(
+                    e.kind(),
+                    format!("cannot open {path}: {e}"),
+                ))
+            }
+        })?;
         Urg::connect(io, config)
     }
 }

@@ -61,7 +61,16 @@ pub type ScanSink<'a> = Box<dyn FnMut(&ScanGeometry, &Scan) -> anyhow::Result<()
 /// Runs `robot-app scan`, printing to stdout.
 pub fn run(args: ScanArgs) -> anyhow::Result<()> {
     let stdout = std::io::stdout();
-    run_to(&args, &mut stdout.lock())
+    match run_to(&args, &mut stdout.lock()) {
+        // The reader went away (`robot-app scan ... | head`): not an error.
+        Err(e)
+            if e.downcast_ref::<std::io::Error>()
+                .is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe) =>
+        {
+            Ok(())
+        }
+        other => other,
+    }
 }
 
 /// Runs `robot-app scan`, writing to `out`.
