@@ -235,10 +235,19 @@ fn each_rule_on_leg_error() {
     }
     // goalseek's defaults must arrive at least as often as the paper's rules, with a median
     // error no worse.
-    let (paper_p95, ours_p95) = (medians[0].1, medians[8].1);
+    // (40 legs are few: the p95 is printed, not asserted.)
+    let (paper, ours) = (medians[0], medians[8]);
     assert!(
-        ours_p95 <= paper_p95,
-        "goalseek p95 {ours_p95} vs paper {paper_p95}"
+        ours.0 <= paper.0,
+        "goalseek median {} vs paper {}",
+        ours.0,
+        paper.0
+    );
+    assert!(
+        ours.2 >= paper.2,
+        "goalseek arrived {} vs paper {}",
+        ours.2,
+        paper.2
     );
 }
 
