@@ -264,6 +264,7 @@ pub struct SensorCore<S> {
     motor_code: u8,
     bit_rate: u32,
     timer_origin_ms: u64,
+    last_get_stamp_ms: Option<u64>,
     stream: Option<StreamJob>,
     inbuf: Vec<u8>,
     out: VecDeque<u8>,
@@ -288,6 +289,7 @@ impl<S: LaserSource> SensorCore<S> {
             motor_code: 0,
             bit_rate: 19_200,
             timer_origin_ms: 0,
+            last_get_stamp_ms: None,
             stream: None,
             inbuf: Vec::new(),
             out: VecDeque::new(),
@@ -552,7 +554,15 @@ impl<S: LaserSource> SensorCore<S> {
                     return self.reply(line, st(b"10"));
                 }
                 let period = p.scan_period().as_millis().max(1) as u64;
-                let stamp = now_ms - now_ms % period;
+                // Each GD takes a fresh scan from the source, so it gets a fresh scan time:
+                // the latest scan start, or the next one if that was already served.
+                let mut stamp = now_ms - now_ms % period;
+                if let Some(last) = self.last_get_stamp_ms
+                    && stamp <= last
+                {
+                    stamp = last + period;
+                }
+                self.last_get_stamp_ms = Some(stamp);
                 self.scan_reply(line, &req, Status::OK, stamp);
             }
             Command::Stream(req) => {
@@ -830,6 +840,10 @@ impl<S: LaserSource> Write for Emulator<S> {
         }
         let now = self.now_ms();
         self.core.feed(buf, now);
+        if let (Clock::Virtual(t), Some(s)) = (&mut self.clock, self.core.last_get_stamp_ms) {
+            // A single scan finishes before its reply: the virtual clock follows it.
+            *t = (*t).max(s);
+        }
         Ok(buf.len())
     }
 

@@ -206,8 +206,14 @@ fn one_source_scan_per_driver_scan_in_both_modes() {
             ..UrgConfig::default()
         };
         let mut urg = Urg::connect(Emulator::new(p, src), cfg).unwrap();
+        let mut last_stamp = None;
         for k in 1..=5u32 {
             let s = urg.next_scan().unwrap();
+            let stamp = s.sensor_time_ms.unwrap();
+            if let Some(l) = last_stamp {
+                assert_eq!(stamp - l, 100, "{mode:?}: one sensor period per scan");
+            }
+            last_stamp = Some(stamp);
             assert_eq!(s.ranges_m[0], f64::from(k) / 10.0, "{mode:?}");
             assert_eq!(*n.lock().unwrap(), k, "{mode:?}");
         }
