@@ -33,6 +33,9 @@ pub struct GridParams {
     pub occupied_log_odds: f32,
     /// A cell at or below this is free.
     pub free_threshold_log_odds: f32,
+    /// The grid never grows wider or taller than this, metres: a scan that would need more
+    /// (a wild pose or range) is skipped.
+    pub max_extent_m: f64,
 }
 
 impl GridParams {
@@ -45,6 +48,7 @@ impl GridParams {
             clamp_log_odds: 5.0,
             occupied_log_odds: 0.4,
             free_threshold_log_odds: -0.4,
+            max_extent_m: 2000.0,
         }
     }
 }
@@ -266,9 +270,13 @@ impl OccupancyGrid {
 
     /// Integrates `scan` taken at `pose`: cells along each ray up to its end become more
     /// free, the cell of a hit more occupied; max-range rays only free; error rays nothing.
-    pub fn integrate(&mut self, pose: &Pose2, geometry: &ScanGeometry, scan: &Scan) {
+    ///
+    /// Returns false (and changes nothing) for a non-finite pose, a scan without usable rays,
+    /// or one that would grow the grid beyond `max_extent_m`.
+    pub fn integrate(&mut self, pose: &Pose2, geometry: &ScanGeometry, scan: &Scan) -> bool {
         if !(pose.x_m.is_finite() && pose.y_m.is_finite() && pose.theta_rad.is_finite()) {
-            return;
+            tracing::warn!(?pose, "occupancy grid: non-finite pose, scan skipped");
+            return false;
         }
         let n = geometry
             .ray_count
@@ -287,7 +295,7 @@ impl OccupancyGrid {
             ends.push((pose.transform_point(geometry.robot_point(i, range)), hit));
         }
         if ends.is_empty() {
-            return;
+            return false;
         }
         let mut lo = self.global(start);
         let mut hi = lo;
@@ -295,6 +303,23 @@ impl OccupancyGrid {
             let g = self.global(*p);
             lo = (lo.0.min(g.0), lo.1.min(g.1));
             hi = (hi.0.max(g.0), hi.1.max(g.1));
+        }
+        if self.width > 0 {
+            lo = (lo.0.min(self.col0), lo.1.min(self.row0));
+            hi = (
+                hi.0.max(self.col0 + self.width as i64 - 1),
+                hi.1.max(self.row0 + self.height as i64 - 1),
+            );
+        }
+        let max_cells = (self.params.max_extent_m / self.params.resolution_m).ceil();
+        let span = (hi.0.saturating_sub(lo.0)).max(hi.1.saturating_sub(lo.1)) as f64;
+        if span + 1.0 > max_cells {
+            tracing::warn!(
+                ?pose,
+                max_extent_m = self.params.max_extent_m,
+                "occupancy grid: scan would grow the map too far, skipped"
+            );
+            return false;
         }
         self.ensure(lo, hi);
         let free = self.params.free_log_odds;
@@ -316,6 +341,7 @@ impl OccupancyGrid {
                 self.add(g, hit);
             }
         }
+        true
     }
 
     /// The grid as a greyscale image, row 0 at the top (highest y): occupied 0, free 254,

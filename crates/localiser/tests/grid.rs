@@ -162,3 +162,19 @@ fn point_map_transforms_hits() {
     assert_eq!(text.lines().count(), 361);
     assert!(text.starts_with("scan,x_m,y_m\n"));
 }
+
+#[test]
+fn wild_pose_or_range_does_not_blow_up_the_grid() {
+    let (g, scan, pose) = room_scan();
+    let mut grid = OccupancyGrid::new(0.05);
+    assert!(grid.integrate(&pose, &g, &scan));
+    let (w, h) = (grid.width(), grid.height());
+    // A pose a thousand kilometres away would need a 2e7-cell-wide grid: skipped.
+    assert!(!grid.integrate(&Pose2::new(1e6, 0.0, 0.0), &g, &scan));
+    assert!(!grid.integrate(&Pose2::new(f64::NAN, 0.0, 0.0), &g, &scan));
+    // A "hit" at 1e9 m from a faulty source: skipped too.
+    let mut wild = scan.clone();
+    wild.ranges_m[0] = 1e9;
+    assert!(!grid.integrate(&pose, &g, &wild));
+    assert_eq!((grid.width(), grid.height()), (w, h));
+}
