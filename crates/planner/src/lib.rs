@@ -175,6 +175,8 @@ pub struct Planner {
     memory: ObstacleMemory,
     no_safe_tries: usize,
     no_path_tries: usize,
+    /// Scratch: (score, ray, travel) of every safe ray.
+    candidates: Vec<(f64, usize, f64)>,
 }
 
 impl Planner {
@@ -197,6 +199,7 @@ impl Planner {
             params: p,
             no_safe_tries: 0,
             no_path_tries: 0,
+            candidates: Vec::new(),
         }
     }
 
@@ -291,7 +294,7 @@ impl Planner {
                 map_path = false;
             }
         }
-        let mut best: Option<(f64, usize, f64)> = None;
+        self.candidates.clear();
         for i in 0..n {
             let Some(travel) = leg(i) else { continue };
             let end = pose.transform_point(geometry.robot_point(i, travel));
@@ -300,28 +303,56 @@ impl Planner {
             } else {
                 end.distance_m(&target)
             };
-            // Ties go to the ray nearer the target's bearing, then the longer leg.
-            let better = match best {
-                None => true,
-                Some((s, j, tj)) => {
-                    score < s - 1e-9
-                        || ((score - s).abs() <= 1e-9
-                            && tie_key(geometry, i, travel, t_bearing)
-                                < tie_key(geometry, j, tj, t_bearing))
-                }
-            };
-            if better {
-                best = Some((score, i, travel));
+            self.candidates.push((score, i, travel));
+        }
+        // Best score first; ties go to the ray nearer the target's bearing, then the longer leg.
+        self.candidates.sort_by(|a, b| {
+            a.0.total_cmp(&b.0).then_with(|| {
+                tie_key(geometry, a.1, a.2, t_bearing).cmp(&tie_key(geometry, b.1, b.2, t_bearing))
+            })
+        });
+        // The scan cannot see obstacles just outside its field of view: a leg is also cut
+        // where it enters an obstacle remembered from earlier scans.
+        let min_travel = self.params.min_travel_m;
+        for k in 0..self.candidates.len() {
+            let (_, i, travel) = self.candidates[k];
+            let travel = self.memory_cap_m(pose, geometry.bearing_rad(i), travel);
+            if travel >= min_travel && travel > 0.0 {
+                self.no_safe_tries = 0;
+                return Plan::Go {
+                    ray_index: i,
+                    alpha_rad: normalize_angle_rad(geometry.bearing_rad(i)),
+                    travel_m: travel,
+                    target_in_view: false,
+                };
             }
         }
-        let (_, i, travel) = best.expect("at least one safe ray");
-        self.no_safe_tries = 0;
-        Plan::Go {
-            ray_index: i,
-            alpha_rad: normalize_angle_rad(geometry.bearing_rad(i)),
-            travel_m: travel,
-            target_in_view: false,
+        self.no_safe_tries += 1;
+        if self.no_safe_tries >= self.params.max_no_safe_tries {
+            return Plan::Unreachable {
+                tries: self.no_safe_tries,
+            };
         }
+        Plan::NoSafeRay
+    }
+
+    /// How far along `bearing_rad` from `pose` (at most `travel_m`) the robot stays out of the
+    /// remembered obstacles; a stretch that starts inside one (the robot next to a wall) is
+    /// allowed until it leaves it.
+    fn memory_cap_m(&self, pose: &Pose2, bearing_rad: f64, travel_m: f64) -> f64 {
+        let step = self.params.grid_resolution_m / 2.0;
+        let steps = (travel_m / step).ceil() as usize;
+        let mut left_start = !self.memory.is_blocked(pose.position());
+        for s in 1..=steps {
+            let t = (s as f64 * step).min(travel_m);
+            let p = pose.rotated(bearing_rad).advanced(t).position();
+            let blocked = self.memory.is_blocked(p);
+            if left_start && blocked {
+                return ((s - 1) as f64 * step).min(travel_m);
+            }
+            left_start |= !blocked;
+        }
+        travel_m
     }
 
     /// `Go` straight at the target when it lies within the field of view and the rays on
