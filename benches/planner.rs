@@ -1,0 +1,73 @@
+//! The planner on the paper's world: `plan()` with the path-length field cached, `plan()` when
+//! the field must be recomputed (the map or the target changed), and `add_scan`.
+//!
+//! Run: `cargo bench --bench planner -- --quick`.
+
+use std::hint::black_box;
+
+#[path = "common/cave.rs"]
+mod cave;
+
+use criterion::{Criterion, criterion_group, criterion_main};
+use expansion::Expander;
+use planner::{PlanRule, Planner, PlannerParams};
+use scan_types::{Pose2, ScanGeometry, WorldPoint};
+
+/// Free poses of the paper's world (see benches/expansion.rs).
+const POSES: [(f64, f64, f64); 6] = [
+    (-3.92, -4.26, 0.785),
+    (-2.09, -2.34, 0.9),
+    (-1.0, 2.0, 0.3),
+    (3.5, -1.0, 1.2),
+    (2.0, 3.0, 0.6),
+    (4.0, 4.0, -2.4),
+];
+
+fn bench_planner(c: &mut Criterion) {
+    let Some(bm) = cave::Bitmap::load() else {
+        eprintln!("note: ../shared/worlds/stage/cave.png not found; planner benches skipped");
+        return;
+    };
+    let g = ScanGeometry::paper();
+    let scans: Vec<_> = POSES
+        .iter()
+        .map(|&(x, y, h)| (Pose2::new(x, y, h), bm.scan(&g, x, y, h)))
+        .collect();
+    let mut planner = Planner::new(PlannerParams::default());
+    for (pose, scan) in &scans {
+        planner.add_scan(pose, &g, scan);
+    }
+    let (pose, scan) = &scans[1];
+    let mut clearance = vec![0.0; g.ray_count];
+    Expander::new(&g).clearances(scan, 0.4, &mut clearance);
+    let target = WorldPoint::new(4.0, 4.0);
+    let other = WorldPoint::new(3.0, 4.0);
+
+    let mut group = c.benchmark_group("planner");
+    group.bench_function("plan_map_path_cached_field", |b| {
+        b.iter(|| black_box(planner.plan(pose, &g, scan, &clearance, target)))
+    });
+    // Alternating targets forces a new path-length field every call.
+    let mut flip = false;
+    group.bench_function("plan_map_path_new_field", |b| {
+        b.iter(|| {
+            flip = !flip;
+            let t = if flip { target } else { other };
+            black_box(planner.plan(pose, &g, scan, &clearance, t))
+        })
+    });
+    let mut greedy = Planner::new(PlannerParams {
+        rule: PlanRule::Greedy,
+        ..PlannerParams::default()
+    });
+    group.bench_function("plan_greedy", |b| {
+        b.iter(|| black_box(greedy.plan(pose, &g, scan, &clearance, target)))
+    });
+    group.bench_function("add_scan", |b| {
+        b.iter(|| planner.add_scan(pose, &g, black_box(scan)))
+    });
+    group.finish();
+}
+
+criterion_group!(benches, bench_planner);
+criterion_main!(benches);
