@@ -204,6 +204,21 @@ impl<T: Read + Write> Urg<T> {
         Ok(offset)
     }
 
+    /// `RS`: resets the sensor (laser, motor speed, bit rate and its timer). The time-stamp
+    /// history is cleared and the clocks are synchronised again (if configured); in polled
+    /// mode the laser is switched back on.
+    pub fn reset(&mut self) -> Result<(), UrgError> {
+        self.port.reset()?;
+        self.unwrapper.reset();
+        self.offset_s = None;
+        if self.config.time_sync_rounds > 0 {
+            self.sync_time(self.config.time_sync_rounds)?;
+        } else if self.config.mode == AcquisitionMode::Polled {
+            self.port.laser_on()?;
+        }
+        Ok(())
+    }
+
     /// Stops streaming (`QT`) if a stream is running.
     pub fn stop(&mut self) -> Result<(), UrgError> {
         if self.port.is_streaming() {

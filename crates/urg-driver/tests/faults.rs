@@ -239,6 +239,22 @@ fn timestamps_unwrap_across_the_24_bit_wrap_and_map_to_host_time() {
 }
 
 #[test]
+fn reset_restarts_the_sensor_clock_and_scans_go_on() {
+    let mut urg = Urg::connect(
+        Emulator::fixed(Model::Urg04lx).timer_at(5_000_000),
+        UrgConfig::default(),
+    )
+    .unwrap();
+    let before = urg.next_scan().unwrap().sensor_time_ms.unwrap();
+    assert!(before >= 5_000_000);
+    urg.reset().unwrap();
+    // RS set the sensor timer to 0: the next stamps are small, not a wrap.
+    let after = urg.next_scan().unwrap().sensor_time_ms.unwrap();
+    assert!(after < 1_000, "{after}");
+    assert!(urg.time_offset_s().is_some());
+}
+
+#[test]
 fn checksum_error_drops_one_scan_and_is_counted() {
     let emu = Emulator::fixed(Model::Urg04lx);
     let ctl = emu.control();
