@@ -47,6 +47,10 @@ pub struct Expander {
     cos_tab: Vec<f64>,
     /// `sin^2(m * increment)` for `m` in `0..ray_count`.
     sin2_tab: Vec<f64>,
+    /// The two tables reversed (entry `ray_count - 1 - m`), so that the rays on the left of a
+    /// disc read them in increasing memory order too.
+    cos_rev: Vec<f64>,
+    sin2_rev: Vec<f64>,
     /// Half-width in rays of the window of a disc with `r / d` in bin `b`, for bins below 1.
     window_tab: Vec<usize>,
     /// Half-width in rays of 90 deg: the window when the robot is inside the disc.
@@ -76,13 +80,15 @@ impl Expander {
     pub fn new(geometry: &ScanGeometry) -> Self {
         let n = geometry.ray_count;
         let inc = geometry.increment_rad.abs();
-        let cos_tab = (0..n).map(|m| (m as f64 * inc).cos()).collect();
-        let sin2_tab = (0..n)
+        let cos_tab: Vec<f64> = (0..n).map(|m| (m as f64 * inc).cos()).collect();
+        let sin2_tab: Vec<f64> = (0..n)
             .map(|m| {
                 let s = (m as f64 * inc).sin();
                 s * s
             })
             .collect();
+        let cos_rev = cos_tab.iter().rev().copied().collect();
+        let sin2_rev = sin2_tab.iter().rev().copied().collect();
         // One ray of margin: the exact test per pair decides, the window only has to cover.
         let rays_of = |angle: f64| ((angle / inc).floor() as usize).saturating_add(1).min(n);
         let window_tab = (0..WINDOW_BINS)
@@ -101,6 +107,8 @@ impl Expander {
             geometry: *geometry,
             cos_tab,
             sin2_tab,
+            cos_rev,
+            sin2_rev,
             window_tab,
             window_inside,
             wrap_shifts,
@@ -183,26 +191,43 @@ impl Expander {
         let floor = (d - r2.sqrt()).max(0.0);
         let d2 = d * d;
         let n = out.len();
+        let n_tab = self.cos_tab.len();
         for b in lo / BLOCK..=hi / BLOCK {
             if self.block_max[b] <= floor {
                 continue; // every ray of the block is already blocked nearer than that
             }
             let start = (b * BLOCK).max(lo);
             let end = ((b + 1) * BLOCK).min(hi + 1);
-            for (k, slot) in out.iter_mut().enumerate().take(end).skip(start) {
-                let m = k.abs_diff(j);
-                let tm = d * self.cos_tab[m];
-                let disc = r2 - d2 * self.sin2_tab[m];
-                // Branch-free: a miss (or a disc behind) gives +inf.
-                let entry = if disc >= 0.0 && tm > 0.0 {
-                    (tm - disc.sqrt()).max(0.0)
-                } else {
-                    f64::INFINITY
-                };
-                *slot = slot.min(entry);
+            // Rays left of the disc (k < j): m = j - k, read from the reversed tables.
+            let left_end = end.min(j);
+            if start < left_end {
+                let t0 = n_tab - 1 - j + start;
+                let t1 = t0 + (left_end - start);
+                apply(
+                    &mut out[start..left_end],
+                    &self.cos_rev[t0..t1],
+                    &self.sin2_rev[t0..t1],
+                    d,
+                    d2,
+                    r2,
+                );
+            }
+            // Rays at or right of the disc (k >= j): m = k - j.
+            let right_start = start.max(j);
+            if right_start < end {
+                let t0 = right_start - j;
+                let t1 = end - j;
+                apply(
+                    &mut out[right_start..end],
+                    &self.cos_tab[t0..t1],
+                    &self.sin2_tab[t0..t1],
+                    d,
+                    d2,
+                    r2,
+                );
             }
             let block = &out[b * BLOCK..((b + 1) * BLOCK).min(n)];
-            self.block_max[b] = block.iter().copied().fold(0.0, f64::max);
+            self.block_max[b] = block.iter().fold(0.0, |m, &v| if v > m { v } else { m });
         }
     }
 
@@ -266,6 +291,28 @@ impl Expander {
         }
         for &t in &self.stack {
             self.stop_left[t as usize] = 0;
+        }
+    }
+}
+
+/// Applies one disc (range `d`) to a run of rays whose angles off the disc have the given
+/// cosines and squared sines: each ray keeps the nearer of its clearance and its entry.
+#[inline]
+fn apply(out: &mut [f64], cos: &[f64], sin2: &[f64], d: f64, d2: f64, r2: f64) {
+    for ((slot, &c), &s2) in out.iter_mut().zip(cos).zip(sin2) {
+        let tm = d * c;
+        let disc = r2 - d2 * s2;
+        let root = if disc > 0.0 { disc } else { 0.0 }.sqrt();
+        let entry = tm - root;
+        let entry = if entry > 0.0 { entry } else { 0.0 };
+        // A miss (or a disc behind) leaves the ray as it is.
+        let entry = if disc >= 0.0 && tm > 0.0 {
+            entry
+        } else {
+            f64::INFINITY
+        };
+        if entry < *slot {
+            *slot = entry;
         }
     }
 }
