@@ -108,6 +108,18 @@ pub struct DetectParams {
     /// Fewest max-range rays in a row next to a jump edge (1 = the paper: a single miss in a
     /// wall makes two landmarks).
     pub min_open_rays: usize,
+    /// An open run bounded by hits on both sides is open space only if those two hits lie at
+    /// least this far apart, metres; a narrower run is a dropout (dark, glossy or glancing
+    /// surface) or a gap nothing fits through (0 = the paper: every run counts).
+    pub min_gap_width_m: f64,
+    /// Drop a jump whose open run is narrower than `dropout_max_width_m` and whose surface,
+    /// extended across the run, meets the hit on the run's far side (within 0.1 m + 5 %):
+    /// the surface continues through the run, a sensor dropout (a real URG-04LX reads no
+    /// return on dark or glossy surfaces) or a slot too narrow for the robot.
+    pub reject_bridged_dropouts: bool,
+    /// Widest open run `reject_bridged_dropouts` treats as a dropout, metres (a door in a
+    /// straight wall is bridged too, but wider than this).
+    pub dropout_max_width_m: f64,
     /// Invalid (error) rays skipped between two valid rays; a longer gap splits the scan.
     pub max_skipped_errors: usize,
 }
@@ -133,6 +145,9 @@ impl Default for DetectParams {
             reject_hidden_at_side: false,
             min_support_rays: 2,
             min_open_rays: 3,
+            min_gap_width_m: 0.25,
+            reject_bridged_dropouts: true,
+            dropout_max_width_m: 0.7,
             max_skipped_errors: 3,
         }
     }
@@ -153,6 +168,8 @@ impl DetectParams {
             reject_hidden_at_side: false,
             min_support_rays: 1,
             min_open_rays: 1,
+            min_gap_width_m: 0.0,
+            reject_bridged_dropouts: false,
             ..Self::default()
         }
     }
@@ -169,6 +186,8 @@ impl DetectParams {
             reject_hidden_at_side: false,
             min_support_rays: 1,
             min_open_rays: 1,
+            min_gap_width_m: 0.0,
+            reject_bridged_dropouts: false,
             ..*self
         }
     }
@@ -307,6 +326,37 @@ fn jumps(geometry: &ScanGeometry, seg: &[Ray], params: &DetectParams, out: &mut 
             }
             if open < params.min_open_rays {
                 continue;
+            }
+            // The hit bounding the open run on its far side, if any.
+            if params.min_gap_width_m > 0.0
+                && k >= 0
+                && k < len
+                && let (Some(r0), Some(r1)) = (seg[j as usize].hit, seg[k as usize].hit)
+            {
+                let a = geometry.robot_point(seg[j as usize].index, r0);
+                let b = geometry.robot_point(seg[k as usize].index, r1);
+                if a.distance_m(&b) < params.min_gap_width_m {
+                    continue;
+                }
+            }
+            if params.reject_bridged_dropouts
+                && k >= 0
+                && k < len
+                && let (Some(r0), Some(r1)) = (seg[j as usize].hit, seg[k as usize].hit)
+            {
+                let a = geometry.robot_point(seg[j as usize].index, r0);
+                let b = geometry.robot_point(seg[k as usize].index, r1);
+                let mut pts = vec![a];
+                pts.extend(arm(geometry, seg, j as usize, dir, params));
+                if a.distance_m(&b) < params.dropout_max_width_m
+                    && pts.len() >= 3
+                    && let Some((c, d, _)) = fit_line(&pts)
+                    && let Some(t) =
+                        line_range_on_ray(c, d, geometry.bearing_rad(seg[k as usize].index))
+                    && (t - r1).abs() < 0.1 + 0.05 * r1
+                {
+                    continue;
+                }
             }
             let j = j as usize;
             // Open space lies toward p: below j when dir = +1.

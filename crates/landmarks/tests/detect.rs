@@ -297,3 +297,30 @@ fn mismatched_scan_length_does_not_panic() {
             .contains("neighbour_n")
     );
 }
+
+#[test]
+fn short_dropout_run_in_a_wall_is_not_open_space() {
+    // Wall at 1 m straight ahead (x = 1), 5 rays reading no return in its middle: the two
+    // bounding hits are 5 spacings apart (about 5 * 0.0061 = 3 cm): a dropout, not a gap.
+    let g = paper_geometry();
+    let mut scan = scan_at(&g, &[((1.0, -3.0), (1.0, 3.0))], 0.0, 0.0, 0.0);
+    for i in 340..345 {
+        scan.status[i] = RayStatus::MaxRange;
+        scan.ranges_m[i] = g.max_range_m;
+    }
+    assert_eq!(detect(&g, &scan, &DetectParams::paper()).len(), 2 + 2);
+    let ours = detect(&g, &scan, &DetectParams::default());
+    assert!(
+        ours.iter().all(|l| !(330..355).contains(&l.index)),
+        "{ours:?}"
+    );
+    // A real door, 0.9 m wide, in the same wall keeps its jambs.
+    let walls = vec![((1.0, -3.0), (1.0, -0.45)), ((1.0, 0.45), (1.0, 3.0))];
+    let door = scan_at(&g, &walls, 0.0, 0.0, 0.0);
+    let jambs = detect(&g, &door, &DetectParams::default());
+    assert!(
+        jambs.iter().any(|l| dist(l, 1.0, -0.45) < 0.02),
+        "{jambs:?}"
+    );
+    assert!(jambs.iter().any(|l| dist(l, 1.0, 0.45) < 0.02), "{jambs:?}");
+}
