@@ -175,3 +175,25 @@ fn measured_rotation_beats_the_command_under_noise() {
         assert!(fallbacks * 20 <= trials, "{name}: {fallbacks} fallbacks");
     }
 }
+
+#[test]
+fn half_turns_wrap_around() {
+    // 240 deg of view: a turn near 180 deg leaves about 60 deg of overlap, still enough.
+    let g = ScanGeometry::paper();
+    let walls = room();
+    let before = scan_at(&g, &walls, 0.3, -0.4, 0.2);
+    for (commanded_deg, truth_deg) in [(175.0f64, 176.0f64), (179.5, 180.7), (-178.0, -179.0)] {
+        let truth = truth_deg.to_radians();
+        let after = scan_at(&g, &walls, 0.3, -0.4, 0.2 + truth);
+        let m = measure_rotation(
+            &g,
+            &before,
+            &after,
+            commanded_deg.to_radians(),
+            5f64.to_radians(),
+        )
+        .unwrap_or_else(|| panic!("{commanded_deg} deg: no match"));
+        let err = scan_types::angle_diff_rad(m, truth).abs().to_degrees();
+        assert!(err < 0.05, "{commanded_deg} deg: error {err} deg");
+    }
+}
