@@ -183,6 +183,9 @@ pub struct World {
     list_start: Vec<u32>,
     list_items: Vec<u32>,
     dist: Vec<u16>,
+    /// Packed per-cell record for the ray caster: even = empty with chessboard distance
+    /// `v >> 1`; odd = non-empty with `v >> 1` = 0 solid, k = primitive list k - 1.
+    info: Vec<u32>,
     prims: Vec<Prim>,
     polygons: Vec<Vec<[f64; 2]>>,
     obstacle_count: usize,
@@ -289,6 +292,7 @@ impl World {
             list_start: Vec::new(),
             list_items: Vec::new(),
             dist: Vec::new(),
+            info: Vec::new(),
             prims: Vec::new(),
             polygons: Vec::new(),
             obstacle_count: parts.obstacles.len(),
@@ -466,6 +470,18 @@ impl World {
             }
         }
         self.dist = d.into_iter().map(|v| v as u16).collect();
+        self.info = self
+            .cells
+            .iter()
+            .zip(&self.dist)
+            .map(|(&c, &d)| {
+                if c == EMPTY {
+                    (d as u32) << 1
+                } else {
+                    ((c - 1) << 1) | 1
+                }
+            })
+            .collect();
     }
 
     /// The world's name (file stem or "paper").
@@ -518,43 +534,63 @@ impl World {
         }
         let mut t = t0;
         let mut best = f64::INFINITY;
-        let nudge = 1e-9;
         let (nx, ny) = (self.nx as i64, self.ny as i64);
+        // Work in cell units: cell coordinate = oc + t * dc.
+        let oc = [(o[0] - self.x0) / self.rx, (o[1] - self.y0) / self.ry];
+        let dc = [d[0] / self.rx, d[1] / self.ry];
+        let idc = [1.0 / dc[0], 1.0 / dc[1]];
+        let (sx, sy) = (d[0] > 0.0, d[1] > 0.0);
+        // The cell holding coordinate f on a ray moving with slope `dcs`: on a cell border, the
+        // cell ahead.
+        // Coordinates within rounding of the grid's edge are clamped into it (the ray enters the
+        // grid exactly on its edge).
+        let cell = |f: f64, dcs: f64, n: i64| {
+            let c = if dcs < 0.0 {
+                f.ceil() as i64 - 1
+            } else {
+                f.floor() as i64
+            };
+            if (c < 0 && f > -1e-7) || (c >= n && f < n as f64 + 1e-7) {
+                c.clamp(0, n - 1)
+            } else {
+                c
+            }
+        };
         loop {
-            let tn = t + nudge;
-            let cx = ((o[0] + tn * d[0] - self.x0) / self.rx).floor() as i64;
-            let cy = ((o[1] + tn * d[1] - self.y0) / self.ry).floor() as i64;
+            let cx = cell(oc[0] + t * dc[0], dc[0], nx);
+            let cy = cell(oc[1] + t * dc[1], dc[1], ny);
             if cx < 0 || cy < 0 || cx >= nx || cy >= ny {
                 break;
             }
             let idx = cy as usize * self.nx + cx as usize;
-            let cell = self.cells[idx];
-            let half = if cell == EMPTY {
-                self.dist[idx] as i64 - 1
+            let info = self.info[idx];
+            let half = if info & 1 == 0 {
+                (info >> 1) as i64 - 1
             } else {
+                if info == 1 {
+                    return (t <= max_range_m).then_some(t);
+                }
                 0
             };
             // Exit of the box of cells [cx-half, cx+half] x [cy-half, cy+half].
-            let ex = if d[0] > 0.0 {
-                (self.x0 + (cx + half + 1) as f64 * self.rx - o[0]) * inv[0]
-            } else if d[0] < 0.0 {
-                (self.x0 + (cx - half) as f64 * self.rx - o[0]) * inv[0]
+            let bx = if sx { cx + half + 1 } else { cx - half } as f64;
+            let by = if sy { cy + half + 1 } else { cy - half } as f64;
+            let ex = if dc[0] != 0.0 {
+                (bx - oc[0]) * idc[0]
             } else {
                 f64::INFINITY
             };
-            let ey = if d[1] > 0.0 {
-                (self.y0 + (cy + half + 1) as f64 * self.ry - o[1]) * inv[1]
-            } else if d[1] < 0.0 {
-                (self.y0 + (cy - half) as f64 * self.ry - o[1]) * inv[1]
+            let ey = if dc[1] != 0.0 {
+                (by - oc[1]) * idc[1]
             } else {
                 f64::INFINITY
             };
             let exit = ex.min(ey);
-            if cell == SOLID {
-                return (t <= max_range_m).then_some(t);
-            }
-            if cell != EMPTY {
-                for &p in self.list(cell) {
+            if info & 1 == 1 {
+                let l = ((info >> 1) - 1) as usize;
+                let items =
+                    &self.list_items[self.list_start[l] as usize..self.list_start[l + 1] as usize];
+                for &p in items {
                     if let Some(th) = ray_prim(o, d, &self.prims[p as usize]) {
                         best = best.min(th);
                     }
@@ -566,7 +602,8 @@ impl World {
             if exit > t1 {
                 break;
             }
-            t = exit.max(t);
+            // Always progress, even when rounding puts the exit at or before t.
+            t = exit.max(t + 1e-12 + t * 1e-15);
         }
         (best <= max_range_m).then_some(best)
     }
