@@ -6,5 +6,6 @@ pub mod config;
 pub mod logging;
 pub mod outputs;
 pub mod plot;
+pub mod record;
 pub mod scan_csv;
 pub mod simsetup;

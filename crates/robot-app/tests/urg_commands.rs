@@ -107,6 +107,7 @@ fn scan_sim_and_emulate_sim_agree() {
         seed: 0,
         noise: "off".into(),
         no_stdin: true,
+        source: None,
     })
     .unwrap();
     let mut out = Vec::new();

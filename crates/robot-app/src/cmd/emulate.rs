@@ -34,6 +34,9 @@ pub struct EmulateArgs {
     /// Do not stop at end of standard input; serve until killed (for background use).
     #[arg(long)]
     pub no_stdin: bool,
+    /// Take ranges from a recorded log (CARMEN, BreezySLAM, goalseek MCAP), looping at its end.
+    #[arg(long, conflicts_with = "sim")]
+    pub source: Option<PathBuf>,
 }
 
 fn parse_model(s: &str) -> Result<Model, String> {
@@ -51,7 +54,14 @@ fn model_name(m: Model) -> &'static str {
 pub fn start(args: &EmulateArgs) -> anyhow::Result<PtyServer> {
     let mut profile = Profile::of(args.model);
     profile.scip1_at_power_up = args.scip1;
-    let server = if args.sim {
+    let server = if let Some(log) = &args.source {
+        let source = crate::record::LoopingLog::open(log, None)?;
+        emulator::serve_pty_with(urg_driver::SensorCore::new(
+            profile,
+            source,
+            Default::default(),
+        ))
+    } else if args.sim {
         let pose = match &args.pose {
             Some(p) => crate::simsetup::parse_pose(p)?,
             None => crate::simsetup::paper_start(),

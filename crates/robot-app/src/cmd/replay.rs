@@ -1,12 +1,109 @@
-//! `robot-app replay`: under construction.
+//! `robot-app replay`: streams a recorded log (CARMEN, BreezySLAM, goalseek MCAP) through the
+//! live-sensor code path (`LaserSource`), printing each scan like `robot-app scan`.
 
+use std::io::Write;
+use std::path::PathBuf;
+use std::time::{Duration, Instant};
+
+use anyhow::Context;
 use clap::Args;
+use scan_types::LaserSource;
+
+use crate::cmd::scan::ScanFormat;
 
 /// Arguments of `robot-app replay`.
 #[derive(Debug, Args)]
-pub struct ReplayArgs {}
+pub struct ReplayArgs {
+    /// The log: CARMEN .log/.log.gz, BreezySLAM .dat, or a goalseek .mcap recording.
+    pub file: PathBuf,
+    /// Playback speed relative to the log's time stamps (2 = twice as fast, 0 = no waiting).
+    #[arg(long, default_value_t = 1.0)]
+    pub rate: f64,
+    /// Sensor preset whose geometry replaces the log's: paper, urg-04lx, utm-30lx.
+    #[arg(long)]
+    pub sensor: Option<String>,
+    /// Print at most this many scans (default: the whole log).
+    #[arg(long)]
+    pub count: Option<usize>,
+    /// Output format (as `robot-app scan`).
+    #[arg(long, value_enum, default_value = "csv")]
+    pub format: ScanFormat,
+    /// Also write the scans (with the log's poses) to this goalseek MCAP file.
+    #[arg(long)]
+    pub record: Option<PathBuf>,
+}
 
-/// Runs `robot-app replay`.
-pub fn run(_args: ReplayArgs) -> anyhow::Result<()> {
-    anyhow::bail!("'robot-app replay' is not implemented yet")
+/// Runs `robot-app replay`, printing to stdout.
+pub fn run(args: ReplayArgs) -> anyhow::Result<()> {
+    let stdout = std::io::stdout();
+    run_to(&args, &mut std::io::BufWriter::new(stdout.lock()))
+}
+
+/// Runs `robot-app replay`, writing to `out`.
+pub fn run_to<W: Write>(args: &ReplayArgs, out: &mut W) -> anyhow::Result<()> {
+    if !(args.rate.is_finite() && args.rate >= 0.0) {
+        anyhow::bail!("--rate {}: must be a number >= 0", args.rate);
+    }
+    let mut source = crate::record::open_log(&args.file, args.sensor.as_deref())?;
+    let geometry = *source.geometry();
+    let mut recorder = match &args.record {
+        Some(p) => Some(crate::record::Recorder::create(p, &geometry)?),
+        None => None,
+    };
+    let started = Instant::now();
+    let mut first_stamp: Option<f64> = None;
+    let mut k = 0usize;
+    while args.count.is_none_or(|c| k < c) {
+        let rec = match source.next_record() {
+            Ok(r) => r.clone(),
+            Err(e) if e.is_end_of_log() => break,
+            Err(e) => return Err(e).context("replaying"),
+        };
+        let scan = &rec.scan;
+        // Pace by the log's own clock.
+        if args.rate > 0.0 && scan.host_time_s.is_finite() {
+            let t0 = *first_stamp.get_or_insert(scan.host_time_s);
+            let due = (scan.host_time_s - t0) / args.rate;
+            let now = started.elapsed().as_secs_f64();
+            if due > now {
+                std::thread::sleep(Duration::from_secs_f64((due - now).min(60.0)));
+            }
+        }
+        match args.format {
+            ScanFormat::Csv => {
+                if k > 0 {
+                    writeln!(out)?;
+                }
+                crate::scan_csv::write_scan_csv(&mut *out, &geometry, scan)?;
+            }
+            ScanFormat::Json => {
+                let mut v = crate::cmd::scan::scan_json(k, &geometry, scan);
+                let pose = |p: Option<scan_types::Pose2>| {
+                    p.map(|p| serde_json::json!([p.x_m, p.y_m, p.theta_rad]))
+                };
+                v["pose"] = pose(rec.pose).into();
+                v["true_pose"] = pose(rec.true_pose).into();
+                v["line"] = rec.line.into();
+                serde_json::to_writer(&mut *out, &v)?;
+                writeln!(out)?;
+            }
+        }
+        if let Some(r) = recorder.as_mut() {
+            r.record_scan(&geometry, scan, rec.true_pose, rec.pose)?;
+        }
+        k += 1;
+    }
+    out.flush()?;
+    if let Some(r) = recorder {
+        r.finish()?;
+    }
+    tracing::info!(
+        "{}: {k} scans replayed, {} records skipped",
+        args.file.display(),
+        source.skipped()
+    );
+    for e in source.errors() {
+        tracing::warn!("{e}");
+    }
+    Ok(())
 }

@@ -126,10 +126,7 @@ pub fn run_to<W: Write>(args: &ScanArgs, out: &mut W) -> anyhow::Result<()> {
 
 /// The recorder behind `--record FILE`.
 fn record_sink(path: &std::path::Path) -> anyhow::Result<ScanSink<'static>> {
-    anyhow::bail!(
-        "--record {}: recording is not wired into 'robot-app scan' yet",
-        path.display()
-    )
+    crate::record::scan_sink(path)
 }
 
 fn print_scans<S: LaserSource, W: Write>(
