@@ -89,7 +89,9 @@ fn scan_of(toks: &[&str], geometry: &ScanGeometry, host_time_s: f64) -> Result<S
     let mut ranges_m = Vec::with_capacity(toks.len());
     let mut status = Vec::with_capacity(toks.len());
     for (i, t) in toks.iter().enumerate() {
-        let r = num(t, &format!("reading {i}"))?;
+        let r: f64 = t
+            .parse()
+            .map_err(|_| format!("reading {i} {t:?} is not a number"))?;
         if r.is_nan() || r < 0.0 {
             ranges_m.push(f64::NAN);
             status.push(RayStatus::Error(0));
