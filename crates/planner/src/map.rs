@@ -33,6 +33,10 @@ pub struct ObstacleMemory {
     field_key: Option<(u64, usize)>,
     /// Scratch of the wavefront: one bucket per cost modulo the bucket count.
     buckets: Vec<Vec<u32>>,
+    /// Scratch of the wavefront: the bucket being expanded.
+    popped: Vec<u32>,
+    /// Scratch of the wavefront: free cells, border closed.
+    passable: Vec<bool>,
 }
 
 impl ObstacleMemory {
@@ -61,6 +65,8 @@ impl ObstacleMemory {
             field: Vec::new(),
             field_key: None,
             buckets: vec![Vec::new(); (DIAGONAL + 1) as usize],
+            popped: Vec::new(),
+            passable: Vec::new(),
         }
     }
 
@@ -229,23 +235,37 @@ impl ObstacleMemory {
         true
     }
 
-    /// Dial's shortest paths over free cells (8-connected), from the seeded buckets.
+    /// Dial's shortest paths over free cells (8-connected, no corner cutting), from the
+    /// seeded buckets.
     fn wavefront(&mut self) {
         let nb = self.buckets.len();
-        let (w, h) = (self.width as i64, self.height as i64);
-        let steps: [(i64, i64, u32); 8] = [
-            (1, 0, STRAIGHT),
-            (-1, 0, STRAIGHT),
-            (0, 1, STRAIGHT),
-            (0, -1, STRAIGHT),
-            (1, 1, DIAGONAL),
-            (1, -1, DIAGONAL),
-            (-1, 1, DIAGONAL),
-            (-1, -1, DIAGONAL),
+        let w = self.width;
+        let n = self.width * self.height;
+        // Passable cells, with the grid's border rows and columns closed so that neighbour
+        // indices never leave the grid.
+        self.passable.clear();
+        self.passable.extend(self.blocked.iter().map(|&b| b == 0));
+        for c in 0..w {
+            self.passable[c] = false;
+            self.passable[n - 1 - c] = false;
+        }
+        for r in 0..self.height {
+            self.passable[r * w] = false;
+            self.passable[r * w + w - 1] = false;
+        }
+        let wi = w as isize;
+        let straight = [1isize, -1, wi, -wi];
+        // Diagonal step and the two straight cells it passes between.
+        let diagonal = [
+            (wi + 1, 1, wi),
+            (wi - 1, -1, wi),
+            (-wi + 1, 1, -wi),
+            (-wi - 1, -1, -wi),
         ];
         let mut cost: u32 = 0;
         let mut empty_run = 0;
         let mut popped = Vec::new();
+        std::mem::swap(&mut popped, &mut self.popped);
         while empty_run < nb {
             let slot = cost as usize % nb;
             if self.buckets[slot].is_empty() {
@@ -260,33 +280,52 @@ impl ObstacleMemory {
                 if self.field[c] != cost {
                     continue; // a stale entry
                 }
-                let (x, y) = ((c % self.width) as i64, (c / self.width) as i64);
-                for &(dx, dy, step) in &steps {
-                    let (nx, ny) = (x + dx, y + dy);
-                    if nx < 0 || ny < 0 || nx >= w || ny >= h {
-                        continue;
-                    }
-                    let k = (ny * w + nx) as usize;
-                    if self.blocked[k] > 0 {
-                        continue;
-                    }
-                    // No cutting corners between two blocked cells.
-                    if dx != 0
-                        && dy != 0
-                        && (self.blocked[(y * w + nx) as usize] > 0
-                            || self.blocked[(ny * w + x) as usize] > 0)
-                    {
-                        continue;
-                    }
-                    let nc = cost + step;
-                    if nc < self.field[k] {
-                        self.field[k] = nc;
-                        self.buckets[nc as usize % nb].push(k as u32);
-                    }
+                // Only a seed can be impassable (the target next to a wall): it is expanded
+                // unless it lies on the closed border.
+                if !self.passable[c] && self.on_border(c) {
+                    continue;
                 }
+                self.expand_from(c, cost, &straight, &diagonal);
             }
             popped.clear();
             cost += 1;
+        }
+        self.popped = popped;
+    }
+
+    fn on_border(&self, c: usize) -> bool {
+        let (x, y) = (c % self.width, c / self.width);
+        x == 0 || y == 0 || x + 1 == self.width || y + 1 == self.height
+    }
+
+    #[inline]
+    fn expand_from(
+        &mut self,
+        c: usize,
+        cost: u32,
+        straight: &[isize; 4],
+        diagonal: &[(isize, isize, isize); 4],
+    ) {
+        let nb = self.buckets.len();
+        for &o in straight {
+            let k = (c as isize + o) as usize;
+            let nc = cost + STRAIGHT;
+            if self.passable[k] && nc < self.field[k] {
+                self.field[k] = nc;
+                self.buckets[nc as usize % nb].push(k as u32);
+            }
+        }
+        for &(o, a, b) in diagonal {
+            let k = (c as isize + o) as usize;
+            let nc = cost + DIAGONAL;
+            if self.passable[k]
+                && self.passable[(c as isize + a) as usize]
+                && self.passable[(c as isize + b) as usize]
+                && nc < self.field[k]
+            {
+                self.field[k] = nc;
+                self.buckets[nc as usize % nb].push(k as u32);
+            }
         }
     }
 
