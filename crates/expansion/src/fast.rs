@@ -25,8 +25,9 @@ const BLOCK: usize = 8;
 ///   at least as near as disc `j` and lying between disc `j` and ray `k` is always entered
 ///   first: disc `j`'s window stops at the first such disc on each side (found for all
 ///   discs at once with a monotonic stack).
-/// - Discs are visited nearest first, and a block of rays is skipped when every ray of it
-///   is already blocked nearer than `d - r`, the nearest possible entry.
+/// - Discs are visited nearest first, and a block of 8 rays is skipped when every ray of it
+///   is already blocked nearer than the disc's entry into the block's ray nearest to it
+///   (the smallest entry of the block), or when that ray does not touch the disc.
 ///
 /// ```
 /// use expansion::{Expander, clearances_reference};
@@ -198,6 +199,24 @@ impl Expander {
             }
             let start = (b * BLOCK).max(lo);
             let end = ((b + 1) * BLOCK).min(hi + 1);
+            // The entry grows with the angle off the disc: the block's ray nearest the disc
+            // gives a lower bound for the whole block (or shows that none is touched).
+            let m = if end <= j {
+                j - (end - 1)
+            } else {
+                start.saturating_sub(j)
+            };
+            // (Only without wrap-around: there the nearest ray in index is not the nearest in angle.)
+            if m > 0 && self.wrap_shifts.is_empty() {
+                let disc = r2 - d2 * self.sin2_tab[m];
+                let tm = d * self.cos_tab[m];
+                if disc < 0.0 || tm <= 0.0 {
+                    continue;
+                }
+                if self.block_max[b] <= tm - disc.sqrt() {
+                    continue;
+                }
+            }
             // Rays left of the disc (k < j): m = j - k, read from the reversed tables.
             let left_end = end.min(j);
             if start < left_end {
