@@ -25,7 +25,7 @@ fn cluttered(n: usize, seed: u64) -> World {
             Obstacle::Box {
                 centre: c,
                 size: [s, rng.random_range(0.1..0.5)],
-                angle_rad: rng.random_range(0.0..3.14),
+                angle_rad: rng.random_range(0.0..std::f64::consts::PI),
             }
         } else {
             Obstacle::Circle {

@@ -59,7 +59,7 @@ fn grid_ray_caster_matches_brute_force() {
     for world_seed in 0..6 {
         let n = [3usize, 20, 60][world_seed % 3];
         // Coordinates on a 0.05 m lattice half the time, to land edges on cell borders.
-        let mut coord = |lo: f64, hi: f64, rng: &mut ChaCha8Rng| {
+        let coord = |lo: f64, hi: f64, rng: &mut ChaCha8Rng| {
             let v: f64 = rng.random_range(lo..hi);
             if world_seed % 2 == 0 {
                 (v / 0.05).round() * 0.05
