@@ -111,8 +111,5 @@ pub fn run_to<W: Write>(args: &ReplayArgs, out: &mut W) -> anyhow::Result<()> {
         args.file.display(),
         source.skipped()
     );
-    for e in source.errors() {
-        tracing::warn!("{e}");
-    }
     Ok(())
 }
