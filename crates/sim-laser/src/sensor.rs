@@ -242,13 +242,29 @@ pub fn cast_scan<R: Rng + ?Sized>(
     };
     let o = [pose.x_m, pose.y_m];
     let max = geometry.max_range_m;
+    let (inc_s, inc_c) = geometry.increment_rad.sin_cos();
+    let inc_cs = [inc_c, inc_s];
+    let mut step_dir = [1.0, 0.0];
     for i in 0..n {
-        let mut a = pose.theta_rad + geometry.bearing_rad(i);
-        if noise.angular_sigma_rad > 0.0 {
-            a += noise.angular_sigma_rad * normal(rng);
-        }
-        let (s, c) = a.sin_cos();
-        let hit = world.raycast_dir(o, [c, s], max);
+        let dir = if noise.angular_sigma_rad > 0.0 {
+            let a =
+                pose.theta_rad + geometry.bearing_rad(i) + noise.angular_sigma_rad * normal(rng);
+            let (s, c) = a.sin_cos();
+            [c, s]
+        } else {
+            // Exact every 32 rays, rotated by the increment in between (error below 1e-14).
+            step_dir = if i % 32 == 0 {
+                let (s, c) = (pose.theta_rad + geometry.bearing_rad(i)).sin_cos();
+                [c, s]
+            } else {
+                [
+                    step_dir[0] * inc_cs[0] - step_dir[1] * inc_cs[1],
+                    step_dir[0] * inc_cs[1] + step_dir[1] * inc_cs[0],
+                ]
+            };
+            step_dir
+        };
+        let hit = world.raycast_dir(o, dir, max);
         let (mut r, mut st) = match hit {
             Some(t) if t < max => (t, RayStatus::Hit),
             _ => (max, RayStatus::MaxRange),

@@ -183,9 +183,9 @@ pub struct World {
     list_start: Vec<u32>,
     list_items: Vec<u32>,
     dist: Vec<u16>,
-    /// Packed per-cell record for the ray caster: even = empty with chessboard distance
-    /// `v >> 1`; odd = non-empty with `v >> 1` = 0 solid, k = primitive list k - 1.
-    info: Vec<u32>,
+    /// Compact per-cell record for the ray caster (a byte keeps the grid cache-resident):
+    /// even = empty with chessboard distance `v >> 1` (capped at 127); 1 = solid; 3 = shapes.
+    info: Vec<u8>,
     prims: Vec<Prim>,
     polygons: Vec<Vec<[f64; 2]>>,
     obstacle_count: usize,
@@ -474,12 +474,10 @@ impl World {
             .cells
             .iter()
             .zip(&self.dist)
-            .map(|(&c, &d)| {
-                if c == EMPTY {
-                    (d as u32) << 1
-                } else {
-                    ((c - 1) << 1) | 1
-                }
+            .map(|(&c, &d)| match c {
+                EMPTY => (d.min(127) as u8) << 1,
+                SOLID => 1,
+                _ => 3,
             })
             .collect();
     }
@@ -545,10 +543,15 @@ impl World {
         // Coordinates within rounding of the grid's edge are clamped into it (the ray enters the
         // grid exactly on its edge).
         let cell = |f: f64, dcs: f64, n: i64| {
+            // Truncation with a correction: `floor`/`ceil` are library calls on baseline x86-64.
+            let i = f as i64;
             let c = if dcs < 0.0 {
-                f.ceil() as i64 - 1
+                // ceil(f) - 1
+                if (i as f64) < f { i } else { i - 1 }
+            } else if (i as f64) > f {
+                i - 1
             } else {
-                f.floor() as i64
+                i
             };
             if (c < 0 && f > -1e-7) || (c >= n && f < n as f64 + 1e-7) {
                 c.clamp(0, n - 1)
@@ -587,10 +590,7 @@ impl World {
             };
             let exit = ex.min(ey);
             if info & 1 == 1 {
-                let l = ((info >> 1) - 1) as usize;
-                let items =
-                    &self.list_items[self.list_start[l] as usize..self.list_start[l + 1] as usize];
-                for &p in items {
+                for &p in self.list(self.cells[idx]) {
                     if let Some(th) = ray_prim(o, d, &self.prims[p as usize]) {
                         best = best.min(th);
                     }
