@@ -183,9 +183,10 @@ pub struct World {
     list_start: Vec<u32>,
     list_items: Vec<u32>,
     dist: Vec<u16>,
-    /// Compact per-cell record for the ray caster (a byte keeps the grid cache-resident):
-    /// even = empty with chessboard distance `v >> 1` (capped at 127); 1 = solid; 3 = shapes.
-    info: Vec<u8>,
+    /// For the ray caster, per cell and per quadrant of travel (`4 * cell + q`, `q` = bit 0: +x,
+    /// bit 1: +y): the side, in cells, of the largest empty square with this cell at its corner
+    /// extending toward that quadrant (capped at 255); 0 for a non-empty cell.
+    quad: Vec<u8>,
     prims: Vec<Prim>,
     polygons: Vec<Vec<[f64; 2]>>,
     obstacle_count: usize,
@@ -292,7 +293,7 @@ impl World {
             list_start: Vec::new(),
             list_items: Vec::new(),
             dist: Vec::new(),
-            info: Vec::new(),
+            quad: Vec::new(),
             prims: Vec::new(),
             polygons: Vec::new(),
             obstacle_count: parts.obstacles.len(),
@@ -470,16 +471,34 @@ impl World {
             }
         }
         self.dist = d.into_iter().map(|v| v as u16).collect();
-        self.info = self
-            .cells
-            .iter()
-            .zip(&self.dist)
-            .map(|(&c, &d)| match c {
-                EMPTY => (d.min(127) as u8) << 1,
-                SOLID => 1,
-                _ => 3,
-            })
-            .collect();
+        self.quad = vec![0u8; 4 * nx * ny];
+        for q in 0..4usize {
+            let (px, py) = (q & 1 == 1, q & 2 == 2);
+            let xs: Vec<usize> = if px { (0..nx).rev().collect() } else { (0..nx).collect() };
+            let ys: Vec<usize> = if py { (0..ny).rev().collect() } else { (0..ny).collect() };
+            let step = |v: usize, pos: bool, n: usize| -> Option<usize> {
+                if pos {
+                    (v + 1 < n).then_some(v + 1)
+                } else {
+                    v.checked_sub(1)
+                }
+            };
+            for &y in &ys {
+                for &x in &xs {
+                    let i = y * nx + x;
+                    if self.cells[i] != EMPTY {
+                        continue;
+                    }
+                    let get = |xx: Option<usize>, yy: Option<usize>| match (xx, yy) {
+                        (Some(a), Some(b)) => self.quad[4 * (b * nx + a) + q] as u32,
+                        _ => 255,
+                    };
+                    let (x2, y2) = (step(x, px, nx), step(y, py, ny));
+                    let m = get(x2, Some(y)).min(get(Some(x), y2)).min(get(x2, y2));
+                    self.quad[4 * i + q] = (m + 1).min(255) as u8;
+                }
+            }
+        }
     }
 
     /// The world's name (file stem or "paper").
@@ -538,6 +557,7 @@ impl World {
         let dc = [d[0] / self.rx, d[1] / self.ry];
         let idc = [1.0 / dc[0], 1.0 / dc[1]];
         let (sx, sy) = (d[0] > 0.0, d[1] > 0.0);
+        let quadrant = usize::from(sx) | (usize::from(sy) << 1);
         // The cell holding coordinate f on a ray moving with slope `dcs`: on a cell border, the
         // cell ahead.
         // Coordinates within rounding of the grid's edge are clamped into it (the ray enters the
@@ -566,18 +586,18 @@ impl World {
                 break;
             }
             let idx = cy as usize * self.nx + cx as usize;
-            let info = self.info[idx];
-            let half = if info & 1 == 0 {
-                (info >> 1) as i64 - 1
-            } else {
-                if info == 1 {
+            let k = self.quad[4 * idx + quadrant];
+            let k = if k == 0 {
+                if self.cells[idx] == SOLID {
                     return (t <= max_range_m).then_some(t);
                 }
-                0
+                1
+            } else {
+                k as i64
             };
-            // Exit of the box of cells [cx-half, cx+half] x [cy-half, cy+half].
-            let bx = if sx { cx + half + 1 } else { cx - half } as f64;
-            let by = if sy { cy + half + 1 } else { cy - half } as f64;
+            // Exit of the empty square of k x k cells from this cell toward the ray's quadrant.
+            let bx = if sx { cx + k } else { cx - k + 1 } as f64;
+            let by = if sy { cy + k } else { cy - k + 1 } as f64;
             let ex = if dc[0] != 0.0 {
                 (bx - oc[0]) * idc[0]
             } else {
@@ -589,7 +609,7 @@ impl World {
                 f64::INFINITY
             };
             let exit = ex.min(ey);
-            if info & 1 == 1 {
+            if self.quad[4 * idx + quadrant] == 0 {
                 for &p in self.list(self.cells[idx]) {
                     if let Some(th) = ray_prim(o, d, &self.prims[p as usize]) {
                         best = best.min(th);
