@@ -474,8 +474,16 @@ impl World {
         self.quad = vec![0u8; 4 * nx * ny];
         for q in 0..4usize {
             let (px, py) = (q & 1 == 1, q & 2 == 2);
-            let xs: Vec<usize> = if px { (0..nx).rev().collect() } else { (0..nx).collect() };
-            let ys: Vec<usize> = if py { (0..ny).rev().collect() } else { (0..ny).collect() };
+            let xs: Vec<usize> = if px {
+                (0..nx).rev().collect()
+            } else {
+                (0..nx).collect()
+            };
+            let ys: Vec<usize> = if py {
+                (0..ny).rev().collect()
+            } else {
+                (0..ny).collect()
+            };
             let step = |v: usize, pos: bool, n: usize| -> Option<usize> {
                 if pos {
                     (v + 1 < n).then_some(v + 1)
@@ -530,18 +538,21 @@ impl World {
         {
             return None;
         }
-        let inv = [1.0 / d[0], 1.0 / d[1]];
-        // Clip against the grid box.
-        let gx1 = self.x0 + self.nx as f64 * self.rx;
-        let gy1 = self.y0 + self.ny as f64 * self.ry;
+        // Work in cell units: cell coordinate = oc + t * dc.
+        let (irx, iry) = (1.0 / self.rx, 1.0 / self.ry);
+        let oc = [(o[0] - self.x0) * irx, (o[1] - self.y0) * iry];
+        let dc = [d[0] * irx, d[1] * iry];
+        let idc = [1.0 / dc[0], 1.0 / dc[1]];
+        let (nx, ny) = (self.nx as i64, self.ny as i64);
+        // Clip against the grid box [0, nx] x [0, ny].
         let (mut t0, mut t1) = (0.0f64, max_range_m);
-        for (oo, ii, lo, hi) in [(o[0], inv[0], self.x0, gx1), (o[1], inv[1], self.y0, gy1)] {
+        for (oo, ii, hi) in [(oc[0], idc[0], nx as f64), (oc[1], idc[1], ny as f64)] {
             if ii.is_infinite() {
-                if oo < lo || oo >= hi {
+                if oo < 0.0 || oo >= hi {
                     return None;
                 }
             } else {
-                let (a, b) = ((lo - oo) * ii, (hi - oo) * ii);
+                let (a, b) = (-oo * ii, (hi - oo) * ii);
                 t0 = t0.max(a.min(b));
                 t1 = t1.min(a.max(b));
             }
@@ -551,11 +562,6 @@ impl World {
         }
         let mut t = t0;
         let mut best = f64::INFINITY;
-        let (nx, ny) = (self.nx as i64, self.ny as i64);
-        // Work in cell units: cell coordinate = oc + t * dc.
-        let oc = [(o[0] - self.x0) / self.rx, (o[1] - self.y0) / self.ry];
-        let dc = [d[0] / self.rx, d[1] / self.ry];
-        let idc = [1.0 / dc[0], 1.0 / dc[1]];
         let (sx, sy) = (d[0] > 0.0, d[1] > 0.0);
         let quadrant = usize::from(sx) | (usize::from(sy) << 1);
         // The cell holding coordinate f on a ray moving with slope `dcs`: on a cell border, the
