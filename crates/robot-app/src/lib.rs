@@ -4,6 +4,7 @@ pub mod base;
 pub mod cmd;
 pub mod config;
 pub mod logging;
+pub mod navigator;
 pub mod outputs;
 pub mod plot;
 pub mod record;

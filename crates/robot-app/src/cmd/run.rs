@@ -1,12 +1,129 @@
-//! `robot-app run`: under construction.
+//! `robot-app run`: the goal-seeking loop on a real Hokuyo and a robot base.
 
+use std::path::PathBuf;
+use std::time::Instant;
+
+use anyhow::{Context, bail};
 use clap::Args;
+use scan_types::{LaserSource, Pose2, Scan};
+
+use super::sim::{parse_pose_deg, parse_xy, thread_cpu_time_s};
+use crate::base::open_base;
+use crate::config::{Config, Method};
+use crate::navigator::Navigator;
+use crate::outputs::{Reason, Summary};
 
 /// Arguments of `robot-app run`.
 #[derive(Debug, Args)]
-pub struct RunArgs {}
+pub struct RunArgs {
+    /// Serial device of the Hokuyo (e.g. /dev/ttyACM0).
+    #[arg(long, value_name = "PATH")]
+    pub port: String,
+    /// Target X,Y in the frame of the start pose.
+    #[arg(long, value_name = "X,Y", allow_hyphen_values = true)]
+    pub goal: String,
+    /// Motion base: stdio (line protocol on stdin/stdout), serial:PATH[@BAUD] or manual.
+    #[arg(long, default_value = "manual", value_name = "BASE")]
+    pub base: String,
+    /// Start pose X,Y,THETA_DEG: where the map's frame puts the robot (default 0,0,0).
+    #[arg(long, value_name = "X,Y,THETA_DEG", allow_hyphen_values = true)]
+    pub start: Option<String>,
+    /// TOML file overriding tuning parameters.
+    #[arg(long, value_name = "FILE")]
+    pub config: Option<PathBuf>,
+    /// Method preset: paper or goalseek (default).
+    #[arg(long)]
+    pub method: Option<Method>,
+    /// Output folder.
+    #[arg(long, default_value = "goalseek-out")]
+    pub out: PathBuf,
+    /// Record every scan to this log file.
+    #[arg(long, value_name = "FILE")]
+    pub record: Option<PathBuf>,
+}
 
 /// Runs `robot-app run`.
-pub fn run(_args: RunArgs) -> anyhow::Result<()> {
-    anyhow::bail!("'robot-app run' is not implemented yet")
+pub fn run(args: RunArgs) -> anyhow::Result<()> {
+    let config = Config::load(args.config.as_deref(), args.method)?;
+    let goal = parse_xy(&args.goal, "--goal")?;
+    let start = match &args.start {
+        Some(s) => parse_pose_deg(s, "--start")?,
+        None => Pose2::new(0.0, 0.0, 0.0),
+    };
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("cannot create {}", args.out.display()))?;
+    crate::outputs::write_atomic(
+        &args.out.join("config.toml"),
+        config.to_toml_string().as_bytes(),
+    )?;
+    let mut base = open_base(&args.base)?;
+    let mut laser = urg_driver::Urg::open(&args.port, urg_driver::UrgConfig::default())
+        .with_context(|| format!("cannot connect to the Hokuyo on {}", args.port))?;
+    tracing::info!(port = %args.port, rays = laser.geometry().ray_count, "sensor connected");
+    let geometry = *laser.geometry();
+    let mut recorder = match &args.record {
+        Some(p) => Some(
+            crate::record::Recorder::create(p, &geometry)
+                .with_context(|| format!("cannot record to {}", p.display()))?,
+        ),
+        None => None,
+    };
+    let mut record_error: Option<String> = None;
+    let mut hook = |scan: &Scan| {
+        if let Some(r) = recorder.as_mut()
+            && record_error.is_none()
+            && let Err(e) = r.write(scan)
+        {
+            record_error = Some(e.to_string());
+        }
+    };
+    let wall = Instant::now();
+    let cpu0 = thread_cpu_time_s();
+    let outcome = Navigator::new(&mut laser, &mut *base, &config, start, goal)
+        .with_scan_hook(&mut hook)
+        .run();
+    let cpu = thread_cpu_time_s() - cpu0;
+    let _ = laser.stop();
+    if let Some(r) = recorder {
+        r.finish().context("finishing the recording")?;
+    }
+    let deg = |p: &Pose2| [p.x_m, p.y_m, p.theta_rad.to_degrees()];
+    let summary = Summary {
+        reached: outcome.reason == Reason::Reached,
+        reason: outcome.reason,
+        legs: outcome.legs,
+        scans: outcome.scans,
+        collisions: 0,
+        path_length_m: outcome.path_length_m,
+        final_position_error_m: None,
+        final_heading_error_deg: None,
+        ate_rmse_m: None,
+        goal_distance_m: None,
+        cpu_time_s: cpu,
+        method: config.method.to_string(),
+        seed: None,
+        start: deg(&start),
+        goal: [goal.x_m(), goal.y_m()],
+        final_estimate: deg(&outcome.estimate),
+        final_truth: None,
+        note: outcome.note.clone(),
+    };
+    let run = super::sim::SimRun { summary, outcome };
+    super::sim::write_outputs(&args.out, &run, "goalseek on a real Hokuyo")?;
+    tracing::info!(
+        wall_s = wall.elapsed().as_secs_f64(),
+        "run finished; outputs in {}",
+        args.out.display()
+    );
+    if let Some(e) = record_error {
+        bail!("recording failed: {e}");
+    }
+    if !run.summary.reached {
+        bail!(
+            "the run did not reach the target: {} ({})",
+            run.summary.reason,
+            run.summary.note
+        );
+    }
+    Ok(())
 }

@@ -1,12 +1,339 @@
-//! `robot-app sim`: under construction.
+//! `robot-app sim`: goal seeking in the simulator. With no arguments: the paper's scenario.
 
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use anyhow::{Context, bail};
 use clap::Args;
+use scan_types::{Pose2, WorldPoint};
+use sim_laser::{LaserNoise, MotionNoise, SensorPreset, Simulation, World};
+
+use crate::config::{Config, Method};
+use crate::navigator::{Navigator, Outcome};
+use crate::outputs::{Reason, Summary, write_summary, write_trajectory};
+
+/// The paper's start: (-3.92, -4.26), heading 45 deg.
+pub const PAPER_START: (f64, f64, f64) = (-3.92, -4.26, 45.0);
+/// The paper's target.
+pub const PAPER_GOAL: (f64, f64) = (4.0, 4.0);
+/// A simulated run counts as a success when the true position ends this close to the target.
+pub const SUCCESS_RADIUS_M: f64 = 0.3;
 
 /// Arguments of `robot-app sim`.
 #[derive(Debug, Args)]
-pub struct SimArgs {}
+pub struct SimArgs {
+    /// World file (Stage .png needs a .yaml/.toml wrapper; map_server .yaml; native .toml).
+    /// Default: the paper's world.
+    #[arg(long, value_name = "PATH")]
+    pub world: Option<PathBuf>,
+    /// Start pose X,Y,THETA_DEG (default: the paper's -3.92,-4.26,45).
+    #[arg(long, value_name = "X,Y,THETA_DEG", allow_hyphen_values = true)]
+    pub start: Option<String>,
+    /// Target X,Y (default: the paper's 4,4).
+    #[arg(long, value_name = "X,Y", allow_hyphen_values = true)]
+    pub goal: Option<String>,
+    /// Sensor preset: paper, urg-04lx or utm-30lx.
+    #[arg(long, default_value = "paper")]
+    pub sensor: String,
+    /// Noise seed.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// `off` turns laser and motion noise off; `default` keeps the preset's noise.
+    #[arg(long, default_value = "default", value_parser = ["default", "off"])]
+    pub noise: String,
+    /// TOML file overriding tuning parameters (see docs/robot-app.md).
+    #[arg(long, value_name = "FILE")]
+    pub config: Option<PathBuf>,
+    /// Method preset: paper (as written) or goalseek (default).
+    #[arg(long)]
+    pub method: Option<Method>,
+    /// Output folder.
+    #[arg(long, default_value = "goalseek-out")]
+    pub out: PathBuf,
+    /// Record every scan to this log file.
+    #[arg(long, value_name = "FILE")]
+    pub record: Option<PathBuf>,
+}
+
+/// Everything that defines one simulated run.
+#[derive(Debug, Clone)]
+pub struct SimSpec {
+    /// The world.
+    pub world: Arc<World>,
+    /// A name for the world in reports.
+    pub world_name: String,
+    /// Start pose (true and initial estimate).
+    pub start: Pose2,
+    /// Target.
+    pub goal: WorldPoint,
+    /// Sensor preset.
+    pub sensor: SensorPreset,
+    /// Noise seed.
+    pub seed: u64,
+    /// Noise on.
+    pub noise: bool,
+    /// Tuning.
+    pub config: Config,
+}
+
+impl SimSpec {
+    /// The paper's scenario with a seed and a configuration.
+    pub fn paper(seed: u64, config: Config) -> Self {
+        Self {
+            world: Arc::new(World::paper()),
+            world_name: "paper".into(),
+            start: Pose2::new(PAPER_START.0, PAPER_START.1, PAPER_START.2.to_radians()),
+            goal: WorldPoint::new(PAPER_GOAL.0, PAPER_GOAL.1),
+            sensor: SensorPreset::Paper,
+            seed,
+            noise: true,
+            config,
+        }
+    }
+}
+
+/// One simulated run: its summary and the navigator's outcome.
+pub struct SimRun {
+    /// What `summary.json` holds.
+    pub summary: Summary,
+    /// The loop's record.
+    pub outcome: Outcome,
+}
+
+/// CPU time of the calling thread, seconds.
+pub fn thread_cpu_time_s() -> f64 {
+    // Linux: the first field of schedstat is the time on CPU in nanoseconds.
+    std::fs::read_to_string("/proc/thread-self/schedstat")
+        .ok()
+        .and_then(|s| s.split_whitespace().next()?.parse::<f64>().ok())
+        .map_or(0.0, |ns| ns * 1e-9)
+}
+
+fn pose_deg(p: &Pose2) -> [f64; 3] {
+    [p.x_m, p.y_m, p.theta_rad.to_degrees()]
+}
+
+/// Runs one simulated run (no files written).
+pub fn simulate(spec: &SimSpec, mut on_scan: Option<&mut dyn FnMut(&scan_types::Scan)>) -> SimRun {
+    let cpu0 = thread_cpu_time_s();
+    let (laser_noise, motion_noise) = if spec.noise {
+        (spec.sensor.default_noise(), MotionNoise::default())
+    } else {
+        (LaserNoise::off(), MotionNoise::off())
+    };
+    let sim = Simulation::new(
+        spec.world.clone(),
+        spec.sensor,
+        laser_noise,
+        motion_noise,
+        spec.config.robot.radius_m,
+        spec.start,
+        spec.seed,
+    );
+    let (mut laser, mut base, truth) = sim.split();
+    let mut nav = Navigator::new(&mut laser, &mut base, &spec.config, spec.start, spec.goal)
+        .with_evaluation(&truth);
+    if let Some(f) = on_scan.as_mut() {
+        nav = nav.with_scan_hook(*f);
+    }
+    let outcome = nav.run();
+    let cpu = thread_cpu_time_s() - cpu0;
+    let t = truth.pose();
+    let collisions = truth.collisions();
+    let goal_distance = t.position().distance_m(&spec.goal);
+    let reason = if collisions > 0 {
+        Reason::Collision
+    } else {
+        outcome.reason
+    };
+    let reached = reason == Reason::Reached && collisions == 0 && goal_distance <= SUCCESS_RADIUS_M;
+    let (fe, fh) = outcome
+        .log
+        .final_errors()
+        .map_or((None, None), |(p, h)| (Some(p), Some(h)));
+    let mut note = outcome.note.clone();
+    if reason == Reason::Reached && !reached {
+        note = format!(
+            "false arrival: the estimate reached the target but the robot is {goal_distance:.2} m from it"
+        );
+    }
+    let summary = Summary {
+        reached,
+        reason,
+        legs: outcome.legs,
+        scans: outcome.scans,
+        collisions,
+        path_length_m: outcome.path_length_m,
+        final_position_error_m: fe,
+        final_heading_error_deg: fh,
+        ate_rmse_m: outcome.log.ate_rmse_m(),
+        goal_distance_m: Some(goal_distance),
+        cpu_time_s: cpu,
+        method: spec.config.method.to_string(),
+        seed: Some(spec.seed),
+        start: pose_deg(&spec.start),
+        goal: [spec.goal.x_m(), spec.goal.y_m()],
+        final_estimate: pose_deg(&outcome.estimate),
+        final_truth: Some(pose_deg(&t)),
+        note,
+    };
+    SimRun { summary, outcome }
+}
+
+/// Writes every output of a run into `dir` (created if needed).
+pub fn write_outputs(dir: &Path, run: &SimRun, title: &str) -> anyhow::Result<()> {
+    std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    write_summary(dir, &run.summary)?;
+    write_trajectory(dir, &run.outcome.log)?;
+    run.outcome
+        .grid
+        .write_map_server(dir, "map")
+        .with_context(|| format!("writing map.pgm/map.yaml in {}", dir.display()))?;
+    run.outcome
+        .grid
+        .to_png(&dir.join("map.png"))
+        .with_context(|| format!("writing map.png in {}", dir.display()))?;
+    crate::plot::write_plots(dir, &run.outcome.log, title)
+}
+
+/// Parses `X,Y`.
+pub fn parse_xy(s: &str, what: &str) -> anyhow::Result<WorldPoint> {
+    let v = parse_floats(s, what)?;
+    if v.len() != 2 {
+        bail!("{what} '{s}': expected X,Y");
+    }
+    Ok(WorldPoint::new(v[0], v[1]))
+}
+
+/// Parses `X,Y,THETA_DEG`.
+pub fn parse_pose_deg(s: &str, what: &str) -> anyhow::Result<Pose2> {
+    let v = parse_floats(s, what)?;
+    if v.len() != 3 {
+        bail!("{what} '{s}': expected X,Y,THETA_DEG");
+    }
+    Ok(Pose2::new(v[0], v[1], v[2].to_radians()))
+}
+
+fn parse_floats(s: &str, what: &str) -> anyhow::Result<Vec<f64>> {
+    s.split(',')
+        .map(|p| {
+            let x: f64 = p
+                .trim()
+                .parse()
+                .with_context(|| format!("{what} '{s}': '{p}' is not a number"))?;
+            if !x.is_finite() {
+                bail!("{what} '{s}': '{p}' is not finite");
+            }
+            Ok(x)
+        })
+        .collect()
+}
+
+/// Loads a world by path, or the paper's world.
+pub fn load_world(path: Option<&Path>) -> anyhow::Result<(Arc<World>, String)> {
+    match path {
+        None => Ok((Arc::new(World::paper()), "paper".into())),
+        Some(p) => {
+            let w = World::load(p).with_context(|| format!("cannot load world {}", p.display()))?;
+            let name = p
+                .file_stem()
+                .map_or_else(|| "world".into(), |s| s.to_string_lossy().into_owned());
+            Ok((Arc::new(w), name))
+        }
+    }
+}
 
 /// Runs `robot-app sim`.
-pub fn run(_args: SimArgs) -> anyhow::Result<()> {
-    anyhow::bail!("'robot-app sim' is not implemented yet")
+pub fn run(args: SimArgs) -> anyhow::Result<()> {
+    let config = Config::load(args.config.as_deref(), args.method)?;
+    let (world, world_name) = load_world(args.world.as_deref())?;
+    let sensor: SensorPreset = args
+        .sensor
+        .parse()
+        .map_err(|e| anyhow::anyhow!("--sensor {}: {e}", args.sensor))?;
+    let start = match &args.start {
+        Some(s) => parse_pose_deg(s, "--start")?,
+        None => Pose2::new(PAPER_START.0, PAPER_START.1, PAPER_START.2.to_radians()),
+    };
+    let goal = match &args.goal {
+        Some(s) => parse_xy(s, "--goal")?,
+        None => WorldPoint::new(PAPER_GOAL.0, PAPER_GOAL.1),
+    };
+    let spec = SimSpec {
+        world,
+        world_name,
+        start,
+        goal,
+        sensor,
+        seed: args.seed,
+        noise: args.noise != "off",
+        config,
+    };
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("cannot create {}", args.out.display()))?;
+    crate::outputs::write_atomic(
+        &args.out.join("config.toml"),
+        spec.config.to_toml_string().as_bytes(),
+    )?;
+    let run = match &args.record {
+        None => simulate(&spec, None),
+        Some(path) => record_run(&spec, path)?,
+    };
+    let title = format!(
+        "method {} — {} world, seed {}: {}",
+        spec.config.method, spec.world_name, spec.seed, run.summary.reason
+    );
+    write_outputs(&args.out, &run, &title)?;
+    let s = &run.summary;
+    tracing::info!(
+        reached = s.reached,
+        reason = %s.reason,
+        legs = s.legs,
+        final_error_m = s.final_position_error_m.unwrap_or(f64::NAN),
+        goal_distance_m = s.goal_distance_m.unwrap_or(f64::NAN),
+        "run finished; outputs in {}",
+        args.out.display()
+    );
+    #[allow(clippy::print_stdout)]
+    {
+        println!(
+            "{}: {} after {} legs, true distance to target {:.3} m, final localisation error {:.3} m, outputs in {}",
+            if s.reached { "reached" } else { "failed" },
+            s.reason,
+            s.legs,
+            s.goal_distance_m.unwrap_or(f64::NAN),
+            s.final_position_error_m.unwrap_or(f64::NAN),
+            args.out.display()
+        );
+    }
+    if !s.reached {
+        bail!(
+            "the run did not reach the target: {} ({})",
+            s.reason,
+            s.note
+        );
+    }
+    Ok(())
+}
+
+fn record_run(spec: &SimSpec, path: &Path) -> anyhow::Result<SimRun> {
+    let geometry = spec.sensor.geometry();
+    let mut recorder = crate::record::Recorder::create(path, &geometry)
+        .with_context(|| format!("cannot record to {}", path.display()))?;
+    let mut err: Option<anyhow::Error> = None;
+    let mut hook = |scan: &scan_types::Scan| {
+        if err.is_none()
+            && let Err(e) = recorder.write(scan)
+        {
+            err = Some(anyhow::anyhow!("recording to {}: {e}", path.display()));
+        }
+    };
+    let run = simulate(spec, Some(&mut hook));
+    if let Some(e) = err {
+        return Err(e);
+    }
+    recorder
+        .finish()
+        .with_context(|| format!("finishing {}", path.display()))?;
+    Ok(run)
 }

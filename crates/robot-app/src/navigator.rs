@@ -1,0 +1,522 @@
+//! The goal-seeking loop of `docs/method.md` ("One cycle") against any [`LaserSource`] and any
+//! [`MotionBase`]: scan, expand, plan, rotate, rescan, measure the rotation, find landmarks,
+//! select one, triangle OBC, drive to B tracking it, localise at B, map, repeat.
+//!
+//! The estimate is computed from the laser alone; the optional [`Evaluation`] handle (the
+//! simulator's truth) is only read to record the true pose beside the estimate and to end a
+//! run that collided.
+
+use expansion::Expander;
+use landmarks::{
+    DetectParams, Landmark, SelectParams, TrackParams, TrackUpdate, Tracker, detect, select,
+};
+use localiser::OccupancyGrid;
+use planner::{Plan, Planner};
+use scan_types::{LaserSource, MotionBase, Pose2, Scan, ScanGeometry, WorldPoint};
+
+use crate::config::{Config, HeadingRuleCfg, Method};
+use crate::outputs::{LegRecord, Reason, RunLog};
+
+/// Read-only access to what only a simulator knows, for evaluation.
+pub trait Evaluation {
+    /// The true pose.
+    fn true_pose(&self) -> Pose2;
+    /// Collisions so far.
+    fn collisions(&self) -> usize;
+}
+
+impl Evaluation for sim_laser::TruthHandle {
+    fn true_pose(&self) -> Pose2 {
+        self.pose()
+    }
+    fn collisions(&self) -> usize {
+        sim_laser::TruthHandle::collisions(self)
+    }
+}
+
+/// How a run ended and what it recorded.
+pub struct Outcome {
+    /// Why the run ended.
+    pub reason: Reason,
+    /// One line on how it ended.
+    pub note: String,
+    /// Leg ends with estimate, truth, landmark, point B and scan.
+    pub log: RunLog,
+    /// Legs driven.
+    pub legs: usize,
+    /// Scans taken.
+    pub scans: usize,
+    /// Sum of the forward moves commanded, metres.
+    pub path_length_m: f64,
+    /// The final estimate.
+    pub estimate: Pose2,
+    /// The occupancy grid built from the localised scans.
+    pub grid: OccupancyGrid,
+    /// Per leg: (landmark world point, point B) for the first leg checks.
+    pub first_leg: Option<(WorldPoint, WorldPoint)>,
+}
+
+/// A step of the loop failed in a way that ends the run.
+#[derive(Debug)]
+struct Stop(Reason, String);
+
+type Step<T> = Result<T, Stop>;
+
+/// The loop's state for one run.
+pub struct Navigator<'a, L: LaserSource, M: MotionBase + ?Sized> {
+    laser: &'a mut L,
+    base: &'a mut M,
+    eval: Option<&'a dyn Evaluation>,
+    on_scan: Option<&'a mut dyn FnMut(&Scan)>,
+    cfg: Config,
+    geometry: ScanGeometry,
+    goal: WorldPoint,
+    estimate: Pose2,
+    expander: Expander,
+    clearances: Vec<f64>,
+    planner: Planner,
+    grid: OccupancyGrid,
+    detect_params: DetectParams,
+    select_params: SelectParams,
+    track_params: TrackParams,
+    log: RunLog,
+    scans: usize,
+    path_length_m: f64,
+    legs: usize,
+    first_leg: Option<(WorldPoint, WorldPoint)>,
+}
+
+/// Bearing of the side rays.
+const SIDE_RAD: f64 = std::f64::consts::FRAC_PI_2;
+
+impl<'a, L: LaserSource, M: MotionBase + ?Sized> Navigator<'a, L, M> {
+    /// A navigator starting at `start` (the estimate's origin) heading for `goal`.
+    pub fn new(
+        laser: &'a mut L,
+        base: &'a mut M,
+        cfg: &Config,
+        start: Pose2,
+        goal: WorldPoint,
+    ) -> Self {
+        let geometry = *laser.geometry();
+        let (detect_params, select_params, mut track_params) = match cfg.method {
+            Method::Paper => (
+                DetectParams::paper(),
+                SelectParams::paper(),
+                TrackParams::paper(),
+            ),
+            Method::Goalseek => (
+                DetectParams::default(),
+                SelectParams::default(),
+                TrackParams::default(),
+            ),
+        };
+        let mut detect_params = detect_params;
+        detect_params.neighbour_n = cfg.landmarks.neighbour_n;
+        detect_params.range_limit_margin_m = cfg.landmarks.range_limit_margin_m;
+        detect_params.reject_near_range_limit = cfg.landmarks.range_limit_margin_m > 0.0;
+        detect_params.occlusion_edges = cfg.landmarks.occlusion_edges;
+        detect_params.occlusion_jump_m = cfg.landmarks.min_jump_m;
+        let mut select_params = select_params;
+        select_params.max_bearing_rad = cfg.landmarks.max_bearing_deg.to_radians();
+        select_params.min_ahead_m = cfg.landmarks.min_ob_m;
+        track_params.gate_m = cfg.tracking.gate_m;
+        track_params.max_missed_scans = cfg.tracking.max_missed_scans;
+        track_params.detect = detect_params;
+        let planner = Planner::new(crate::navigator::planner_params(cfg));
+        Self {
+            expander: Expander::new(&geometry),
+            clearances: vec![0.0; geometry.ray_count],
+            laser,
+            base,
+            eval: None,
+            on_scan: None,
+            cfg: cfg.clone(),
+            geometry,
+            goal,
+            estimate: start,
+            planner,
+            grid: OccupancyGrid::new(cfg.localiser.map_resolution_m),
+            detect_params,
+            select_params,
+            track_params,
+            log: RunLog {
+                goal: Some(goal),
+                legs: Vec::new(),
+            },
+            scans: 0,
+            path_length_m: 0.0,
+            legs: 0,
+            first_leg: None,
+        }
+    }
+
+    /// Records the true pose beside the estimate (simulator only; never read by the estimate).
+    pub fn with_evaluation(mut self, eval: &'a dyn Evaluation) -> Self {
+        self.eval = Some(eval);
+        self
+    }
+
+    /// Calls `f` with every scan taken (recording).
+    pub fn with_scan_hook(mut self, f: &'a mut dyn FnMut(&Scan)) -> Self {
+        self.on_scan = Some(f);
+        self
+    }
+
+    fn scan(&mut self) -> Step<Scan> {
+        let scan = self
+            .laser
+            .next_scan()
+            .map_err(|e| Stop(Reason::SensorFailure, format!("laser: {e}")))?;
+        if scan.len() != self.geometry.ray_count {
+            return Err(Stop(
+                Reason::SensorFailure,
+                format!(
+                    "laser returned {} rays, its geometry says {}",
+                    scan.len(),
+                    self.geometry.ray_count
+                ),
+            ));
+        }
+        self.scans += 1;
+        if let Some(f) = self.on_scan.as_mut() {
+            f(&scan);
+        }
+        Ok(scan)
+    }
+
+    fn check_collision(&self) -> Step<()> {
+        if let Some(e) = self.eval
+            && e.collisions() > 0
+        {
+            return Err(Stop(
+                Reason::Collision,
+                format!(
+                    "collision near ({:.2}, {:.2})",
+                    e.true_pose().x_m,
+                    e.true_pose().y_m
+                ),
+            ));
+        }
+        Ok(())
+    }
+
+    fn rotate(&mut self, angle_rad: f64) -> Step<()> {
+        self.base
+            .rotate(angle_rad)
+            .map_err(|e| Stop(Reason::SensorFailure, format!("base: {e}")))?;
+        self.check_collision()
+    }
+
+    fn forward(&mut self, distance_m: f64) -> Step<()> {
+        self.base
+            .forward(distance_m)
+            .map_err(|e| Stop(Reason::SensorFailure, format!("base: {e}")))?;
+        self.path_length_m += distance_m.abs();
+        self.check_collision()
+    }
+
+    fn record(&mut self, landmark: Option<WorldPoint>, point_b: Option<WorldPoint>, scan: &Scan) {
+        let scan_points = scan
+            .robot_hits(&self.geometry)
+            .map(|(_, p)| self.estimate.transform_point(p))
+            .collect();
+        self.log.legs.push(LegRecord {
+            leg: self.legs,
+            estimate: self.estimate,
+            truth: self.eval.map(|e| e.true_pose()),
+            landmark,
+            point_b,
+            scan_points,
+        });
+    }
+
+    fn integrate(&mut self, scan: &Scan) {
+        self.grid.integrate(&self.estimate, &self.geometry, scan);
+        self.planner.add_scan(&self.estimate, &self.geometry, scan);
+    }
+
+    /// Rotates by `alpha` in chunks the scans can still align, updating the heading by the
+    /// heading rule; returns the scan after the rotation.
+    fn turn(&mut self, alpha_rad: f64, mut before: Scan) -> Step<Scan> {
+        let max_chunk = 90f64.to_radians();
+        let chunks = (alpha_rad.abs() / max_chunk).ceil().max(1.0) as usize;
+        let chunk = alpha_rad / chunks as f64;
+        for _ in 0..chunks {
+            self.rotate(chunk)?;
+            let after = self.scan()?;
+            let turned = match self.cfg.localiser.heading_rule {
+                HeadingRuleCfg::Commanded => chunk,
+                HeadingRuleCfg::ScanMeasured => localiser::measure_rotation(
+                    &self.geometry,
+                    &before,
+                    &after,
+                    chunk,
+                    self.cfg.localiser.rotation_search_deg.to_radians(),
+                )
+                .unwrap_or_else(|| {
+                    tracing::debug!(chunk, "rotation not measurable; using the command");
+                    chunk
+                }),
+            };
+            self.estimate = self.estimate.rotated(turned);
+            before = after;
+        }
+        Ok(before)
+    }
+
+    /// Clearance straight ahead in `scan` (the ray nearest bearing 0), metres.
+    fn free_ahead_m(&mut self, scan: &Scan) -> f64 {
+        let r = self.cfg.robot.radius_m + self.cfg.robot.expansion_margin_m;
+        self.expander.clearances(scan, r, &mut self.clearances);
+        // The robot's own width: the narrowest clearance over the rays within the disc's
+        // angular half-width at one robot length.
+        let centre = self.geometry.nearest_index(0.0).unwrap_or(0);
+        let half = (2.0f64.to_radians() / self.geometry.increment_rad.abs()).ceil() as usize;
+        let lo = centre.saturating_sub(half);
+        let hi = (centre + half).min(self.geometry.ray_count - 1);
+        self.clearances[lo..=hi]
+            .iter()
+            .copied()
+            .fold(f64::INFINITY, f64::min)
+    }
+
+    /// Drives straight up to `limit_m`, tracking `landmark` (first seen at the current pose
+    /// `origin`), stopping when the side ray sees it if `stop_at_side`. Returns the distance
+    /// travelled as measured from the landmark (commanded distance when nothing was tracked)
+    /// and the last scan.
+    fn drive(
+        &mut self,
+        limit_m: f64,
+        landmark: Option<Landmark>,
+        stop_at_side: bool,
+        mut last_scan: Scan,
+    ) -> Step<(f64, Scan)> {
+        let step_m = self.cfg.tracking.step_m;
+        let mut tracker = landmark.map(|l| Tracker::new(l, self.track_params));
+        let ob0 = landmark.map(|l| l.range_m * l.bearing_rad.cos());
+        let mut commanded = 0.0f64;
+        // Measured travel at the last fix and the commanded travel at that fix.
+        let mut fix: Option<(f64, f64)> = None;
+        while commanded < limit_m - 1e-6 {
+            // Aim the last step at B itself when the landmark gives its distance.
+            let measured_now = fix.map_or(commanded, |(m, c)| m + commanded - c);
+            let to_go = if stop_at_side {
+                match ob0 {
+                    Some(ob) => (ob - measured_now).max(0.01),
+                    None => limit_m - commanded,
+                }
+            } else {
+                limit_m - commanded
+            };
+            let step = step_m.min(to_go).min(limit_m - commanded);
+            if step <= 1e-6 {
+                break;
+            }
+            self.forward(step)?;
+            commanded += step;
+            last_scan = self.scan()?;
+            let Some(t) = tracker.as_mut() else { continue };
+            match t.update(&self.geometry, &last_scan, commanded) {
+                TrackUpdate::Tracked(l) => {
+                    let measured = ob0.unwrap_or(0.0) - l.range_m * l.bearing_rad.cos();
+                    fix = Some((measured, commanded));
+                    if stop_at_side
+                        && l.bearing_rad.abs() >= SIDE_RAD - 0.5 * self.geometry.increment_rad.abs()
+                    {
+                        break;
+                    }
+                }
+                TrackUpdate::Predicted(_) => {}
+                TrackUpdate::Lost => {
+                    tracing::debug!(commanded, "landmark lost while driving");
+                    if stop_at_side {
+                        break;
+                    }
+                    tracker = None;
+                }
+            }
+        }
+        let measured = fix.map_or(commanded, |(m, c)| m + commanded - c);
+        Ok((measured, last_scan))
+    }
+
+    /// A landmark to measure travel by on a leg without a goal landmark: the nearest stable
+    /// feature anywhere in the field of view.
+    fn any_landmark(&self, scan: &Scan) -> Option<Landmark> {
+        let found = detect(&self.geometry, scan, &self.detect_params);
+        let all = SelectParams {
+            max_bearing_rad: std::f64::consts::PI,
+            min_ahead_m: f64::NEG_INFINITY,
+            ..self.select_params
+        };
+        select(&found, &all)
+    }
+
+    /// Runs the loop to the end.
+    pub fn run(mut self) -> Outcome {
+        let result = self.run_inner();
+        let (reason, note) = match result {
+            Ok(()) => (
+                Reason::Reached,
+                "estimate within tolerance of the target".into(),
+            ),
+            Err(Stop(r, n)) => (r, n),
+        };
+        let _ = self.base.stop();
+        Outcome {
+            reason,
+            note,
+            legs: self.legs,
+            scans: self.scans,
+            path_length_m: self.path_length_m,
+            estimate: self.estimate,
+            grid: self.grid,
+            first_leg: self.first_leg,
+            log: self.log,
+        }
+    }
+
+    fn run_inner(&mut self) -> Step<()> {
+        let mut scan = self.scan()?;
+        self.integrate(&scan);
+        self.record(None, None, &scan);
+        let mut failures = 0usize;
+        loop {
+            let to_goal = self.estimate.position().distance_m(&self.goal);
+            if to_goal <= self.cfg.navigator.goal_tolerance_m {
+                return Ok(());
+            }
+            if self.legs >= self.cfg.navigator.max_legs {
+                return Err(Stop(
+                    Reason::LegLimit,
+                    format!(
+                        "{} legs driven, {to_goal:.2} m from the target by the estimate",
+                        self.legs
+                    ),
+                ));
+            }
+            if failures >= self.cfg.navigator.max_failed_tries {
+                return Err(Stop(
+                    Reason::Unreachable,
+                    format!(
+                        "no way toward the target after {failures} tries ({to_goal:.2} m away)"
+                    ),
+                ));
+            }
+            // 2-3. Expand and plan.
+            let r = self.cfg.robot.radius_m + self.cfg.robot.expansion_margin_m;
+            self.expander.clearances(&scan, r, &mut self.clearances);
+            let plan = self.planner.plan(
+                &self.estimate,
+                &self.geometry,
+                &scan,
+                &self.clearances,
+                self.goal,
+            );
+            let (alpha, travel_m, target_in_view) = match plan {
+                Plan::Go {
+                    alpha_rad,
+                    travel_m,
+                    target_in_view,
+                    ..
+                } => (alpha_rad, travel_m, target_in_view),
+                Plan::Unreachable { tries } => {
+                    return Err(Stop(
+                        Reason::Unreachable,
+                        format!("the planner found no way to the target after {tries} tries"),
+                    ));
+                }
+                _ => {
+                    failures += 1;
+                    tracing::debug!(failures, "no safe ray; turning to look elsewhere");
+                    let turn = self.cfg.navigator.recovery_turn_deg.to_radians();
+                    scan = self.turn(turn, scan)?;
+                    continue;
+                }
+            };
+            // 4-5. Rotate, rescan, measure the rotation.
+            scan = self.turn(alpha, scan)?;
+            let free = self.free_ahead_m(&scan);
+            let limit = travel_m.min(free).min(self.cfg.planner.max_leg_m);
+            if limit < 0.05 {
+                failures += 1;
+                tracing::debug!(free, travel_m, "no room ahead after the rotation");
+                continue;
+            }
+            let origin = self.estimate;
+            let goal_r = origin.inverse_transform_point(self.goal);
+            let goal_ahead = goal_r.x_m();
+            // 5. Landmarks in front, the nearest usable one (eq. 6).
+            let found = detect(&self.geometry, &scan, &self.detect_params);
+            let usable: Vec<Landmark> = found
+                .into_iter()
+                .filter(|l| {
+                    let ob = l.range_m * l.bearing_rad.cos();
+                    let cb = (l.range_m * l.bearing_rad.sin()).abs();
+                    ob <= limit && cb >= self.cfg.landmarks.min_cb_m
+                })
+                .collect();
+            let chosen = select(&usable, &self.select_params);
+            let final_leg = (target_in_view || goal_r.bearing_rad().abs() < 3f64.to_radians())
+                && goal_ahead <= limit + 1e-9
+                && chosen.is_none_or(|l| l.range_m * l.bearing_rad.cos() >= goal_ahead);
+            self.legs += 1;
+            let before_leg = self.estimate.position();
+            if final_leg {
+                // The goal is closer than any landmark: drive to it, measuring the travel
+                // on whatever feature stays in view.
+                let lm = self.any_landmark(&scan);
+                let (measured, last) = self.drive(goal_ahead, lm, false, scan)?;
+                self.estimate = origin.advanced(measured);
+                scan = last;
+                self.integrate(&scan);
+                self.record(None, None, &scan);
+            } else if let Some(lm) = chosen {
+                // 6. Triangle OBC; 7. drive to B tracking the landmark; localise at B.
+                let tri = localiser::triangle(&origin, lm.range_m, lm.bearing_rad);
+                if self.first_leg.is_none() {
+                    self.first_leg = Some((tri.landmark, tri.point_b));
+                }
+                let (measured, last) = self.drive(limit, Some(lm), true, scan)?;
+                self.estimate = origin.advanced(measured);
+                scan = last;
+                // 8. Map with the localised scan.
+                self.integrate(&scan);
+                self.record(Some(tri.landmark), Some(tri.point_b), &scan);
+            } else {
+                // No landmark in front: a short leg measured on any feature in view.
+                let lm = self.any_landmark(&scan);
+                let leg = limit.min(1.0);
+                let (measured, last) = self.drive(leg, lm, false, scan)?;
+                self.estimate = origin.advanced(measured);
+                scan = last;
+                self.integrate(&scan);
+                self.record(None, None, &scan);
+            }
+            let progress =
+                before_leg.distance_m(&self.goal) - self.estimate.position().distance_m(&self.goal);
+            if progress < 0.05 {
+                failures += 1;
+            } else {
+                failures = 0;
+            }
+        }
+    }
+}
+
+/// The planner's parameters from the configuration.
+pub fn planner_params(cfg: &Config) -> planner::PlannerParams {
+    planner::PlannerParams {
+        rule: match cfg.planner.rule {
+            crate::config::PlanRuleCfg::Greedy => planner::PlanRule::Greedy,
+            crate::config::PlanRuleCfg::MapPath => planner::PlanRule::MapPath,
+        },
+        robot_radius_m: cfg.robot.radius_m,
+        margin_m: cfg.robot.expansion_margin_m,
+        min_travel_m: cfg.planner.min_travel_m,
+        max_travel_m: cfg.planner.max_leg_m,
+        grid_resolution_m: cfg.planner.grid_resolution_m,
+        ..planner::PlannerParams::default()
+    }
+}
