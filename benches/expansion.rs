@@ -7,6 +7,7 @@
 //! bitmap (dark pixels are obstacles), from the paper's start pose and a few more poses.
 //!
 //! Run: `cargo bench --bench expansion` (add `-- --quick` for a short run).
+#![allow(clippy::print_stderr, clippy::print_stdout)] // benches and tests report to the terminal
 
 use std::hint::black_box;
 

@@ -2,6 +2,7 @@
 //! the field must be recomputed (the map or the target changed), and `add_scan`.
 //!
 //! Run: `cargo bench --bench planner -- --quick`.
+#![allow(clippy::print_stderr, clippy::print_stdout)] // benches and tests report to the terminal
 
 use std::hint::black_box;
 

@@ -7,7 +7,7 @@
 //! distance between the arrival estimate and the true pose. Trials whose selected B cannot
 //! be reached in a straight line are skipped. Figures are printed (run with
 //! `cargo test --test landmark_rules -- --nocapture`).
-#![allow(clippy::print_stdout)]
+#![allow(clippy::print_stderr, clippy::print_stdout)] // benches and tests report to the terminal
 
 use std::sync::Arc;
 

@@ -1,5 +1,6 @@
 //! End to end: the driver opens the emulator through a real pseudo-terminal, as it would open
 //! `/dev/ttyACM0`, connects, reads VV/PP/II, synchronises clocks, streams and polls scans.
+#![allow(clippy::print_stderr, clippy::print_stdout)] // benches and tests report to the terminal
 
 use std::time::Duration;
 
