@@ -22,7 +22,7 @@ pub struct RunArgs {
     /// Target X,Y in the frame of the start pose.
     #[arg(long, value_name = "X,Y", allow_hyphen_values = true)]
     pub goal: String,
-    /// Motion base: stdio (line protocol on stdin/stdout), serial:PATH[@BAUD] or manual.
+    /// Motion base: stdio (line protocol on stdin/stdout), `serial:PATH[@BAUD]` or manual.
     #[arg(long, default_value = "manual", value_name = "BASE")]
     pub base: String,
     /// Start pose X,Y,THETA_DEG: where the map's frame puts the robot (default 0,0,0).
