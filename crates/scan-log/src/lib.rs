@@ -38,8 +38,8 @@ pub use breezy::{
 pub use carmen::{CARMEN_DEFAULT_MAX_RANGE_M, flaser_geometry};
 pub use error::LogError;
 pub use mcap_io::{
-    EST_POSE_TOPIC, McapRecorder, SCAN_TOPIC, STATUS_HIT, STATUS_MAX_RANGE, TRUE_POSE_TOPIC,
-    parse_mcap, partial_path, read_mcap,
+    EST_POSE_TOPIC, McapRecorder, MetadataRecord, SCAN_TOPIC, STATUS_HIT, STATUS_MAX_RANGE,
+    TRUE_POSE_TOPIC, parse_mcap, partial_path, read_mcap, read_mcap_metadata, recording_schemas,
 };
 pub use record::LogRecord;
 pub use source::{LogFormat, LogOptions, LogReader, LogSource, open_text};

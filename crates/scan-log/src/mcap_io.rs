@@ -24,37 +24,71 @@ pub const STATUS_HIT: i32 = -1;
 /// Status code of a max-range ray in the `goalseek.status` array (error codes are >= 0).
 pub const STATUS_MAX_RANGE: i32 = -2;
 
-const LASER_SCAN_SCHEMA: &str = r#"{
+// Foxglove's JSON-schema reader (studio `parseJsonSchema`) needs every object to list its
+// `properties` and accepts only boolean, string, number, integer, object and array types, so
+// the `goalseek` extension is declared field by field.
+const TIME_SCHEMA: &str = r#"{"type": "object", "title": "time", "properties": {"sec": {"type": "integer", "minimum": 0}, "nsec": {"type": "integer", "minimum": 0, "maximum": 999999999}}}"#;
+
+const POSE_PART: &str = r#"{"title": "foxglove.Pose", "type": "object", "properties": {
+      "position": {"title": "foxglove.Vector3", "type": "object", "properties": {"x": {"type": "number"}, "y": {"type": "number"}, "z": {"type": "number"}}},
+      "orientation": {"title": "foxglove.Quaternion", "type": "object", "properties": {"x": {"type": "number"}, "y": {"type": "number"}, "z": {"type": "number"}, "w": {"type": "number"}}}}}"#;
+
+fn laser_scan_schema() -> String {
+    format!(
+        r#"{{
   "title": "foxglove.LaserScan",
   "description": "A single scan from a planar laser range-finder (goalseek adds the exact values in 'goalseek')",
   "type": "object",
-  "properties": {
-    "timestamp": {"type": "object", "properties": {"sec": {"type": "integer", "minimum": 0}, "nsec": {"type": "integer", "minimum": 0, "maximum": 999999999}}},
-    "frame_id": {"type": "string"},
-    "pose": {"type": "object", "properties": {
-      "position": {"type": "object", "properties": {"x": {"type": "number"}, "y": {"type": "number"}, "z": {"type": "number"}}},
-      "orientation": {"type": "object", "properties": {"x": {"type": "number"}, "y": {"type": "number"}, "z": {"type": "number"}, "w": {"type": "number"}}}}},
-    "start_angle": {"type": "number"},
-    "end_angle": {"type": "number"},
-    "ranges": {"type": "array", "items": {"type": "number"}},
-    "intensities": {"type": "array", "items": {"type": "number"}},
-    "goalseek": {"type": "object"}
-  }
-}"#;
+  "properties": {{
+    "timestamp": {TIME_SCHEMA},
+    "frame_id": {{"type": "string"}},
+    "pose": {POSE_PART},
+    "start_angle": {{"type": "number"}},
+    "end_angle": {{"type": "number"}},
+    "ranges": {{"type": "array", "items": {{"type": "number"}}}},
+    "intensities": {{"type": "array", "items": {{"type": "number"}}}},
+    "goalseek": {{"type": "object", "properties": {{
+      "seq": {{"type": "integer"}},
+      "host_time_s": {{"type": "number"}},
+      "sensor_time_ms": {{"type": "integer", "description": "null when the sensor gives no time stamp"}},
+      "first_bearing_rad": {{"type": "number"}},
+      "increment_rad": {{"type": "number"}},
+      "ray_count": {{"type": "integer"}},
+      "min_range_m": {{"type": "number"}},
+      "max_range_m": {{"type": "number"}},
+      "status": {{"type": "array", "items": {{"type": "integer"}}, "description": "-1 hit, -2 max range, >= 0 error code"}}}}}}
+  }}
+}}"#
+    )
+}
 
-const POSE_SCHEMA: &str = r#"{
+fn pose_schema() -> String {
+    format!(
+        r#"{{
   "title": "foxglove.PoseInFrame",
   "description": "A timestamped pose in a named coordinate frame (goalseek adds the exact pose in 'goalseek')",
   "type": "object",
-  "properties": {
-    "timestamp": {"type": "object", "properties": {"sec": {"type": "integer", "minimum": 0}, "nsec": {"type": "integer", "minimum": 0, "maximum": 999999999}}},
-    "frame_id": {"type": "string"},
-    "pose": {"type": "object", "properties": {
-      "position": {"type": "object", "properties": {"x": {"type": "number"}, "y": {"type": "number"}, "z": {"type": "number"}}},
-      "orientation": {"type": "object", "properties": {"x": {"type": "number"}, "y": {"type": "number"}, "z": {"type": "number"}, "w": {"type": "number"}}}}},
-    "goalseek": {"type": "object"}
-  }
-}"#;
+  "properties": {{
+    "timestamp": {TIME_SCHEMA},
+    "frame_id": {{"type": "string"}},
+    "pose": {POSE_PART},
+    "goalseek": {{"type": "object", "properties": {{
+      "seq": {{"type": "integer"}},
+      "x_m": {{"type": "number"}},
+      "y_m": {{"type": "number"}},
+      "theta_rad": {{"type": "number"}}}}}}
+  }}
+}}"#
+    )
+}
+
+/// The JSON schemas of the recording's channels: (schema name, schema text), as written.
+pub fn recording_schemas() -> [(&'static str, String); 2] {
+    [
+        ("foxglove.LaserScan", laser_scan_schema()),
+        ("foxglove.PoseInFrame", pose_schema()),
+    ]
+}
 
 #[derive(Serialize, Deserialize)]
 struct Time {
@@ -212,11 +246,15 @@ impl McapRecorder {
             .add_schema(
                 "foxglove.LaserScan",
                 "jsonschema",
-                LASER_SCAN_SCHEMA.as_bytes(),
+                laser_scan_schema().as_bytes(),
             )
             .map_err(mcap_err)?;
         let pose_schema = writer
-            .add_schema("foxglove.PoseInFrame", "jsonschema", POSE_SCHEMA.as_bytes())
+            .add_schema(
+                "foxglove.PoseInFrame",
+                "jsonschema",
+                pose_schema().as_bytes(),
+            )
             .map_err(mcap_err)?;
         let meta = BTreeMap::new();
         let scan_ch = writer
@@ -347,6 +385,25 @@ impl McapRecorder {
         Ok(())
     }
 
+    /// Writes an MCAP metadata record: a name and string pairs (e.g. the settings of a run).
+    pub fn write_metadata(
+        &mut self,
+        name: &str,
+        values: &BTreeMap<String, String>,
+    ) -> Result<(), LogError> {
+        let tmp = self.tmp_path.clone();
+        let writer = self.writer.as_mut().ok_or_else(|| LogError::Finished {
+            path: self.path.clone(),
+        })?;
+        let record = mcap::records::Metadata {
+            name: name.to_string(),
+            metadata: values.clone(),
+        };
+        writer
+            .write_metadata(&record)
+            .map_err(|source| LogError::Mcap { path: tmp, source })
+    }
+
     /// Writes the MCAP summary and moves the file to its final name; returns the scan count.
     pub fn finish(mut self) -> Result<u64, LogError> {
         self.finish_inner()
@@ -403,6 +460,39 @@ pub fn read_mcap(path: &Path) -> Result<Vec<Result<LogRecord, LogError>>, LogErr
         source,
     })?;
     Ok(parse_mcap(&bytes, path))
+}
+
+/// An MCAP metadata record: its name and string pairs.
+pub type MetadataRecord = (String, BTreeMap<String, String>);
+
+/// The metadata records of a recording, in file order.
+///
+/// A cut file gives the records before the cut (and a warning).
+pub fn read_mcap_metadata(path: &Path) -> Result<Vec<MetadataRecord>, LogError> {
+    let bytes = std::fs::read(path).map_err(|source| LogError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let reader = mcap::read::LinearReader::new_with_options(&bytes, Options::IgnoreEndMagic.into())
+        .map_err(|source| LogError::Mcap {
+            path: path.to_path_buf(),
+            source,
+        })?;
+    let mut out = Vec::new();
+    for record in reader {
+        match record {
+            Ok(mcap::records::Record::Metadata(m)) => out.push((m.name, m.metadata)),
+            Ok(_) => {}
+            Err(e) => {
+                tracing::warn!(
+                    "{}: metadata after a damaged record not read: {e}",
+                    path.display()
+                );
+                break;
+            }
+        }
+    }
+    Ok(out)
 }
 
 /// Parses recording bytes (see [`read_mcap`]); `path` names the source in errors.
