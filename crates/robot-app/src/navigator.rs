@@ -62,12 +62,19 @@ struct Stop(Reason, String);
 
 type Step<T> = Result<T, Stop>;
 
+/// Called with every scan and the estimate of the pose it was taken at.
+pub type ScanPoseHook<'a> = &'a mut dyn FnMut(&Scan, &Pose2);
+
 /// The loop's state for one run.
 pub struct Navigator<'a, L: LaserSource, M: MotionBase + ?Sized> {
     laser: &'a mut L,
     base: &'a mut M,
     eval: Option<&'a dyn Evaluation>,
     on_scan: Option<&'a mut dyn FnMut(&Scan)>,
+    on_scan_pose: Option<ScanPoseHook<'a>>,
+    /// The estimate when motion was last commanded after it changed, and the motion
+    /// commanded since (in that estimate's frame): the estimate at each scan for the hook.
+    commanded_since: (Pose2, Pose2),
     cfg: Config,
     geometry: ScanGeometry,
     goal: WorldPoint,
@@ -131,6 +138,8 @@ impl<'a, L: LaserSource, M: MotionBase + ?Sized> Navigator<'a, L, M> {
             base,
             eval: None,
             on_scan: None,
+            on_scan_pose: None,
+            commanded_since: (start, Pose2::default()),
             cfg: cfg.clone(),
             geometry,
             goal,
@@ -163,6 +172,31 @@ impl<'a, L: LaserSource, M: MotionBase + ?Sized> Navigator<'a, L, M> {
         self
     }
 
+    /// Calls `f` with every scan taken and the estimate of the pose it was taken at: the
+    /// loop's latest estimate moved by the motion commanded since (recording).
+    pub fn with_scan_pose_hook(mut self, f: ScanPoseHook<'a>) -> Self {
+        self.on_scan_pose = Some(f);
+        self
+    }
+
+    /// The latest estimate moved by the motion commanded since it was set.
+    fn estimate_now(&self) -> Pose2 {
+        let (at, moved) = self.commanded_since;
+        if at == self.estimate {
+            at.compose(&moved)
+        } else {
+            self.estimate
+        }
+    }
+
+    /// Adds a commanded motion (robot frame) to the motion since the estimate was set.
+    fn note_command(&mut self, motion: Pose2) {
+        if self.commanded_since.0 != self.estimate {
+            self.commanded_since = (self.estimate, Pose2::default());
+        }
+        self.commanded_since.1 = self.commanded_since.1.compose(&motion);
+    }
+
     fn scan(&mut self) -> Step<Scan> {
         let scan = self
             .laser
@@ -181,6 +215,12 @@ impl<'a, L: LaserSource, M: MotionBase + ?Sized> Navigator<'a, L, M> {
         self.scans += 1;
         if let Some(f) = self.on_scan.as_mut() {
             f(&scan);
+        }
+        if self.on_scan_pose.is_some() {
+            let pose = self.estimate_now();
+            if let Some(f) = self.on_scan_pose.as_mut() {
+                f(&scan, &pose);
+            }
         }
         Ok(scan)
     }
@@ -205,6 +245,7 @@ impl<'a, L: LaserSource, M: MotionBase + ?Sized> Navigator<'a, L, M> {
         self.base
             .rotate(angle_rad)
             .map_err(|e| Stop(Reason::SensorFailure, format!("base: {e}")))?;
+        self.note_command(Pose2::new(0.0, 0.0, angle_rad));
         self.check_collision()
     }
 
@@ -212,6 +253,7 @@ impl<'a, L: LaserSource, M: MotionBase + ?Sized> Navigator<'a, L, M> {
         self.base
             .forward(distance_m)
             .map_err(|e| Stop(Reason::SensorFailure, format!("base: {e}")))?;
+        self.note_command(Pose2::new(distance_m, 0.0, 0.0));
         self.path_length_m += distance_m.abs();
         self.check_collision()
     }

@@ -19,6 +19,8 @@ fn replay_args(file: PathBuf) -> ReplayArgs {
         count: None,
         format: ScanFormat::Csv,
         record: None,
+        through_loop: false,
+        out: None,
     }
 }
 

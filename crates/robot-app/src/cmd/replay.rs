@@ -31,6 +31,14 @@ pub struct ReplayArgs {
     /// Also write the scans (with the log's poses) to this goalseek MCAP file.
     #[arg(long)]
     pub record: Option<PathBuf>,
+    /// Feed the scans of a `robot-app sim --record` recording to the goal-seeking loop (with
+    /// the recorded settings and a base that executes nothing) and compare its legs with the
+    /// recorded ones.
+    #[arg(long = "loop")]
+    pub through_loop: bool,
+    /// With `--loop`: write `trajectory.csv` and `map.pgm`/`map.yaml`/`map.png` here.
+    #[arg(long, value_name = "DIR", requires = "through_loop")]
+    pub out: Option<PathBuf>,
 }
 
 /// Runs `robot-app replay`, printing to stdout.
@@ -50,6 +58,9 @@ pub fn run(args: ReplayArgs) -> anyhow::Result<()> {
 
 /// Runs `robot-app replay`, writing to `out`.
 pub fn run_to<W: Write>(args: &ReplayArgs, out: &mut W) -> anyhow::Result<()> {
+    if args.through_loop {
+        return run_loop(args, out);
+    }
     if !(args.rate.is_finite() && args.rate >= 0.0) {
         anyhow::bail!("--rate {}: must be a number >= 0", args.rate);
     }
@@ -112,4 +123,64 @@ pub fn run_to<W: Write>(args: &ReplayArgs, out: &mut W) -> anyhow::Result<()> {
         source.skipped()
     );
     Ok(())
+}
+
+/// `robot-app replay FILE --loop`: the recorded scans through the loop; fails if the legs
+/// differ from the recorded ones.
+fn run_loop<W: Write>(args: &ReplayArgs, out: &mut W) -> anyhow::Result<()> {
+    use crate::record::{RunSettings, leg_summaries, read_recorded_legs, replay_loop};
+    let settings = RunSettings::read(&args.file)?;
+    let replay = replay_loop(&args.file, &settings.config, settings.start, settings.goal)?;
+    let o = &replay.outcome;
+    writeln!(
+        out,
+        "replayed {} through the loop: {} after {} legs, {} scans read, {} left, {} commands",
+        args.file.display(),
+        o.reason,
+        o.legs,
+        replay.scans_read,
+        replay.scans_left,
+        replay.commands.len()
+    )?;
+    if let Some(dir) = &args.out {
+        std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+        crate::outputs::write_trajectory(dir, &o.log)?;
+        o.grid
+            .write_map_server(dir, "map")
+            .with_context(|| format!("writing map.pgm/map.yaml in {}", dir.display()))?;
+        o.grid
+            .to_png(&dir.join("map.png"))
+            .with_context(|| format!("writing map.png in {}", dir.display()))?;
+    }
+    let Some((reason, recorded)) = read_recorded_legs(&args.file)? else {
+        writeln!(out, "the recording holds no legs to compare with")?;
+        out.flush()?;
+        return Ok(());
+    };
+    let replayed = leg_summaries(&o.log);
+    let first_diff = recorded
+        .iter()
+        .zip(&replayed)
+        .position(|(a, b)| a != b)
+        .or_else(|| (recorded.len() != replayed.len()).then(|| recorded.len().min(replayed.len())));
+    match first_diff {
+        None => {
+            writeln!(
+                out,
+                "same legs as recorded: {} rows (start + {} legs), every estimate, landmark and point B bit for bit; recorded end: {reason}",
+                recorded.len(),
+                o.legs
+            )?;
+            out.flush()?;
+            Ok(())
+        }
+        Some(i) => {
+            out.flush()?;
+            anyhow::bail!(
+                "the replayed legs differ from the recorded ones at row {i}: recorded {:?}, replayed {:?}",
+                recorded.get(i),
+                replayed.get(i)
+            )
+        }
+    }
 }

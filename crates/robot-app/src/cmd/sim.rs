@@ -113,8 +113,20 @@ fn pose_deg(p: &Pose2) -> [f64; 3] {
     [p.x_m, p.y_m, p.theta_rad.to_degrees()]
 }
 
+/// Called with every scan of a simulated run, its true pose and the navigator's estimate.
+pub type ScanObserver<'a> = &'a mut dyn FnMut(&scan_types::Scan, Pose2, Pose2);
+
 /// Runs one simulated run (no files written).
-pub fn simulate(spec: &SimSpec, mut on_scan: Option<&mut dyn FnMut(&scan_types::Scan)>) -> SimRun {
+pub fn simulate(spec: &SimSpec, on_scan: Option<&mut dyn FnMut(&scan_types::Scan)>) -> SimRun {
+    match on_scan {
+        None => simulate_observed(spec, None),
+        Some(f) => simulate_observed(spec, Some(&mut |s, _, _| f(s))),
+    }
+}
+
+/// Runs one simulated run (no files written), showing every scan with its true pose and the
+/// navigator's estimate to `observer`.
+pub fn simulate_observed(spec: &SimSpec, mut observer: Option<ScanObserver>) -> SimRun {
     let cpu0 = thread_cpu_time_s();
     let (laser_noise, motion_noise) = if spec.noise {
         (spec.sensor.default_noise(), MotionNoise::default())
@@ -131,10 +143,16 @@ pub fn simulate(spec: &SimSpec, mut on_scan: Option<&mut dyn FnMut(&scan_types::
         spec.seed,
     );
     let (mut laser, mut base, truth) = sim.split();
+    let observed = observer.is_some();
+    let mut pose_hook = |s: &scan_types::Scan, e: &Pose2| {
+        if let Some(o) = observer.as_mut() {
+            o(s, truth.pose(), *e);
+        }
+    };
     let mut nav = Navigator::new(&mut laser, &mut base, &spec.config, spec.start, spec.goal)
         .with_evaluation(&truth);
-    if let Some(f) = on_scan.as_mut() {
-        nav = nav.with_scan_hook(*f);
+    if observed {
+        nav = nav.with_scan_pose_hook(&mut pose_hook);
     }
     let outcome = nav.run();
     let cpu = thread_cpu_time_s() - cpu0;
@@ -316,22 +334,36 @@ pub fn run(args: SimArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
-fn record_run(spec: &SimSpec, path: &Path) -> anyhow::Result<SimRun> {
+/// Runs `spec` recording every scan with its true pose and the navigator's estimate to
+/// `path` (MCAP), with the run's settings ([`crate::record::RUN_METADATA`]) and the legs it
+/// drove ([`crate::record::LEGS_METADATA`]), so `robot-app replay FILE --loop` can repeat it.
+pub fn record_run(spec: &SimSpec, path: &Path) -> anyhow::Result<SimRun> {
     let geometry = spec.sensor.geometry();
     let mut recorder = crate::record::Recorder::create(path, &geometry)
         .with_context(|| format!("cannot record to {}", path.display()))?;
+    let settings = crate::record::RunSettings {
+        start: spec.start,
+        goal: spec.goal,
+        config: spec.config.clone(),
+        world: spec.world_name.clone(),
+        sensor: spec.sensor.name().to_string(),
+        seed: spec.seed,
+        noise: spec.noise,
+    };
+    recorder.write_metadata(crate::record::RUN_METADATA, &settings.to_metadata())?;
     let mut err: Option<anyhow::Error> = None;
-    let mut hook = |scan: &scan_types::Scan| {
+    let mut hook = |scan: &scan_types::Scan, truth: Pose2, estimate: Pose2| {
         if err.is_none()
-            && let Err(e) = recorder.write(scan)
+            && let Err(e) = recorder.record_scan(&geometry, scan, Some(truth), Some(estimate))
         {
             err = Some(anyhow::anyhow!("recording to {}: {e}", path.display()));
         }
     };
-    let run = simulate(spec, Some(&mut hook));
+    let run = simulate_observed(spec, Some(&mut hook));
     if let Some(e) = err {
         return Err(e);
     }
+    recorder.write_legs(&run.outcome.log, &run.outcome.reason.to_string())?;
     recorder
         .finish()
         .with_context(|| format!("finishing {}", path.display()))?;
