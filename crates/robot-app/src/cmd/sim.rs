@@ -50,7 +50,8 @@ pub struct SimArgs {
     /// Output folder.
     #[arg(long, default_value = "goalseek-out")]
     pub out: PathBuf,
-    /// Record every scan to this log file.
+    /// Record every scan with its true and estimated poses to this MCAP file (Foxglove
+    /// opens it; `robot-app replay FILE --loop` repeats the run from it).
     #[arg(long, value_name = "FILE")]
     pub record: Option<PathBuf>,
 }
