@@ -2,24 +2,23 @@
 //! against the fast kernel, at 685 (paper), 1081 (UTM-30LX) and 1440 rays, r = 0.3 m, on
 //! scans of the paper's world and on random scans.
 //!
-//! The paper's world is `../shared/worlds/stage/cave.png` at 10 m x 10 m with a boundary
-//! wall (see its MANIFEST). Scans of it are cast here by an exact grid traversal of the
-//! bitmap (dark pixels are obstacles), from the paper's start pose and a few more poses.
+//! The paper's world is sim-laser's embedded `cave.png` at 10 m x 10 m with a boundary wall;
+//! its scans are cast noise-free from the paper's start pose and a few more poses.
 //!
 //! Run: `cargo bench --bench expansion` (add `-- --quick` for a short run).
 #![allow(clippy::print_stderr, clippy::print_stdout)] // benches and tests report to the terminal
 
 use std::hint::black_box;
 
-#[path = "common/cave.rs"]
-mod cave;
+#[path = "common/paper_world.rs"]
+mod paper_world;
 
-use cave::Bitmap;
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use expansion::{Expander, clearances_reference};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use scan_types::{Scan, ScanGeometry};
+use sim_laser::World;
 
 const RADIUS_M: f64 = 0.3;
 
@@ -68,19 +67,14 @@ fn random_scans(g: &ScanGeometry, count: usize, seed: u64) -> Vec<Scan> {
 }
 
 fn bench_expansion(c: &mut Criterion) {
-    let bitmap = Bitmap::load();
-    if bitmap.is_none() {
-        eprintln!("note: ../shared/worlds/stage/cave.png not found; paper-world benches skipped");
-    }
+    let world = World::paper();
     for (label, g) in sensors() {
         let mut sets: Vec<(&str, Vec<Scan>)> = vec![("random", random_scans(&g, 4, 7))];
-        if let Some(bm) = &bitmap {
-            let scans = POSES
-                .iter()
-                .map(|&(x, y, h)| bm.scan(&g, x, y, h))
-                .collect();
-            sets.push(("paper_world", scans));
-        }
+        let scans = POSES
+            .iter()
+            .map(|&(x, y, h)| paper_world::scan(&world, &g, x, y, h))
+            .collect();
+        sets.push(("paper_world", scans));
         for (world, scans) in &sets {
             let mut group = c.benchmark_group(format!("expansion/{world}"));
             let mut out = vec![0.0; g.ray_count];

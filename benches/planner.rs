@@ -6,8 +6,8 @@
 
 use std::hint::black_box;
 
-#[path = "common/cave.rs"]
-mod cave;
+#[path = "common/paper_world.rs"]
+mod paper_world;
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use expansion::Expander;
@@ -25,14 +25,11 @@ const POSES: [(f64, f64, f64); 6] = [
 ];
 
 fn bench_planner(c: &mut Criterion) {
-    let Some(bm) = cave::Bitmap::load() else {
-        eprintln!("note: ../shared/worlds/stage/cave.png not found; planner benches skipped");
-        return;
-    };
+    let world = sim_laser::World::paper();
     let g = ScanGeometry::paper();
     let scans: Vec<_> = POSES
         .iter()
-        .map(|&(x, y, h)| (Pose2::new(x, y, h), bm.scan(&g, x, y, h)))
+        .map(|&(x, y, h)| (Pose2::new(x, y, h), paper_world::scan(&world, &g, x, y, h)))
         .collect();
     let mut planner = Planner::new(PlannerParams::default());
     for (pose, scan) in &scans {
