@@ -11,3 +11,43 @@ pub mod run;
 pub mod scan;
 pub mod sim;
 pub mod world;
+
+use std::path::PathBuf;
+
+use anyhow::Context;
+use clap::Args;
+
+use crate::config::{Config, Method};
+
+/// Options shared by the commands that run the goal-seeking loop (`sim`, `run`).
+#[derive(Debug, Clone, Args)]
+pub struct LoopOptions {
+    /// TOML file overriding tuning parameters (see docs/robot-app.md).
+    #[arg(long, value_name = "FILE")]
+    pub config: Option<PathBuf>,
+    /// Method preset: paper (as written) or goalseek (default).
+    #[arg(long)]
+    pub method: Option<Method>,
+    /// Output folder.
+    #[arg(long, default_value = "goalseek-out")]
+    pub out: PathBuf,
+    /// Record every scan to this MCAP file (Foxglove opens it); in the simulator with the
+    /// true and estimated poses, and `robot-app replay FILE --loop` repeats the run from it.
+    #[arg(long, value_name = "FILE")]
+    pub record: Option<PathBuf>,
+}
+
+impl LoopOptions {
+    /// Loads the configuration, creates the output folder and writes the configuration used
+    /// into it as `config.toml`.
+    pub fn prepare(&self) -> anyhow::Result<Config> {
+        let config = Config::load(self.config.as_deref(), self.method)?;
+        std::fs::create_dir_all(&self.out)
+            .with_context(|| format!("cannot create {}", self.out.display()))?;
+        crate::outputs::write_atomic(
+            &self.out.join("config.toml"),
+            config.to_toml_string().as_bytes(),
+        )?;
+        Ok(config)
+    }
+}

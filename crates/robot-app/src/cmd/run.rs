@@ -1,6 +1,5 @@
 //! `robot-app run`: the goal-seeking loop on a real Hokuyo and a robot base.
 
-use std::path::PathBuf;
 use std::time::Instant;
 
 use anyhow::{Context, bail};
@@ -9,7 +8,6 @@ use scan_types::{LaserSource, Pose2, Scan};
 
 use super::sim::{parse_pose_deg, parse_xy, thread_cpu_time_s};
 use crate::base::open_base;
-use crate::config::{Config, Method};
 use crate::navigator::Navigator;
 use crate::outputs::{Reason, Summary};
 
@@ -28,40 +26,25 @@ pub struct RunArgs {
     /// Start pose X,Y,THETA_DEG: where the map's frame puts the robot (default 0,0,0).
     #[arg(long, value_name = "X,Y,THETA_DEG", allow_hyphen_values = true)]
     pub start: Option<String>,
-    /// TOML file overriding tuning parameters.
-    #[arg(long, value_name = "FILE")]
-    pub config: Option<PathBuf>,
-    /// Method preset: paper or goalseek (default).
-    #[arg(long)]
-    pub method: Option<Method>,
-    /// Output folder.
-    #[arg(long, default_value = "goalseek-out")]
-    pub out: PathBuf,
-    /// Record every scan to this log file.
-    #[arg(long, value_name = "FILE")]
-    pub record: Option<PathBuf>,
+    /// Configuration, output folder, recording.
+    #[command(flatten)]
+    pub options: super::LoopOptions,
 }
 
 /// Runs `robot-app run`.
 pub fn run(args: RunArgs) -> anyhow::Result<()> {
-    let config = Config::load(args.config.as_deref(), args.method)?;
+    let config = args.options.prepare()?;
     let goal = parse_xy(&args.goal, "--goal")?;
     let start = match &args.start {
         Some(s) => parse_pose_deg(s, "--start")?,
         None => Pose2::new(0.0, 0.0, 0.0),
     };
-    std::fs::create_dir_all(&args.out)
-        .with_context(|| format!("cannot create {}", args.out.display()))?;
-    crate::outputs::write_atomic(
-        &args.out.join("config.toml"),
-        config.to_toml_string().as_bytes(),
-    )?;
     let mut base = open_base(&args.base)?;
     let mut laser = urg_driver::Urg::open(&args.port, urg_driver::UrgConfig::default())
         .with_context(|| format!("cannot connect to the Hokuyo on {}", args.port))?;
     tracing::info!(port = %args.port, rays = laser.geometry().ray_count, "sensor connected");
     let geometry = *laser.geometry();
-    let mut recorder = match &args.record {
+    let mut recorder = match &args.options.record {
         Some(p) => Some(
             crate::record::Recorder::create(p, &geometry)
                 .with_context(|| format!("cannot record to {}", p.display()))?,
@@ -109,11 +92,11 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
         note: outcome.note.clone(),
     };
     let run = super::sim::SimRun { summary, outcome };
-    super::sim::write_outputs(&args.out, &run, "goalseek on a real Hokuyo")?;
+    super::sim::write_outputs(&args.options.out, &run, "goalseek on a real Hokuyo")?;
     tracing::info!(
         wall_s = wall.elapsed().as_secs_f64(),
         "run finished; outputs in {}",
-        args.out.display()
+        args.options.out.display()
     );
     if let Some(e) = record_error {
         bail!("recording failed: {e}");

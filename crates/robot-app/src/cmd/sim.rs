@@ -8,7 +8,7 @@ use clap::Args;
 use scan_types::{Pose2, WorldPoint};
 use sim_laser::{LaserNoise, MotionNoise, SensorPreset, Simulation, World};
 
-use crate::config::{Config, Method};
+use crate::config::Config;
 use crate::navigator::{Navigator, Outcome};
 use crate::outputs::{Reason, Summary, write_summary, write_trajectory};
 
@@ -41,19 +41,9 @@ pub struct SimArgs {
     /// `off` turns laser and motion noise off; `default` keeps the preset's noise.
     #[arg(long, default_value = "default", value_parser = ["default", "off"])]
     pub noise: String,
-    /// TOML file overriding tuning parameters (see docs/robot-app.md).
-    #[arg(long, value_name = "FILE")]
-    pub config: Option<PathBuf>,
-    /// Method preset: paper (as written) or goalseek (default).
-    #[arg(long)]
-    pub method: Option<Method>,
-    /// Output folder.
-    #[arg(long, default_value = "goalseek-out")]
-    pub out: PathBuf,
-    /// Record every scan with its true and estimated poses to this MCAP file (Foxglove
-    /// opens it; `robot-app replay FILE --loop` repeats the run from it).
-    #[arg(long, value_name = "FILE")]
-    pub record: Option<PathBuf>,
+    /// Configuration, output folder, recording.
+    #[command(flatten)]
+    pub options: super::LoopOptions,
 }
 
 /// Everything that defines one simulated run.
@@ -264,7 +254,7 @@ pub fn load_world(path: Option<&Path>) -> anyhow::Result<(Arc<World>, String)> {
 
 /// Runs `robot-app sim`.
 pub fn run(args: SimArgs) -> anyhow::Result<()> {
-    let config = Config::load(args.config.as_deref(), args.method)?;
+    let config = args.options.prepare()?;
     let (world, world_name) = load_world(args.world.as_deref())?;
     let sensor: SensorPreset = args
         .sensor
@@ -288,13 +278,7 @@ pub fn run(args: SimArgs) -> anyhow::Result<()> {
         noise: args.noise != "off",
         config,
     };
-    std::fs::create_dir_all(&args.out)
-        .with_context(|| format!("cannot create {}", args.out.display()))?;
-    crate::outputs::write_atomic(
-        &args.out.join("config.toml"),
-        spec.config.to_toml_string().as_bytes(),
-    )?;
-    let run = match &args.record {
+    let run = match &args.options.record {
         None => simulate(&spec, None),
         Some(path) => record_run(&spec, path)?,
     };
@@ -302,7 +286,7 @@ pub fn run(args: SimArgs) -> anyhow::Result<()> {
         "method {} — {} world, seed {}: {}",
         spec.config.method, spec.world_name, spec.seed, run.summary.reason
     );
-    write_outputs(&args.out, &run, &title)?;
+    write_outputs(&args.options.out, &run, &title)?;
     let s = &run.summary;
     tracing::info!(
         reached = s.reached,
@@ -311,7 +295,7 @@ pub fn run(args: SimArgs) -> anyhow::Result<()> {
         final_error_m = s.final_position_error_m.unwrap_or(f64::NAN),
         goal_distance_m = s.goal_distance_m.unwrap_or(f64::NAN),
         "run finished; outputs in {}",
-        args.out.display()
+        args.options.out.display()
     );
     #[allow(clippy::print_stdout)]
     {
@@ -322,7 +306,7 @@ pub fn run(args: SimArgs) -> anyhow::Result<()> {
             s.legs,
             s.goal_distance_m.unwrap_or(f64::NAN),
             s.final_position_error_m.unwrap_or(f64::NAN),
-            args.out.display()
+            args.options.out.display()
         );
     }
     if !s.reached {
