@@ -13,6 +13,8 @@ use std::hint::black_box;
 #[path = "common/paper_world.rs"]
 mod paper_world;
 
+use paper_world::POSES;
+
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use expansion::{Expander, clearances_reference};
 use rand::{Rng, SeedableRng};
@@ -38,17 +40,6 @@ fn sensors() -> Vec<(&'static str, ScanGeometry)> {
         ),
     ]
 }
-
-/// Poses in free space of the paper's world (each at least 0.45 m from any obstacle): the
-/// paper's start, its point B, and points spread over the world.
-const POSES: [(f64, f64, f64); 6] = [
-    (-3.92, -4.26, 0.785),
-    (-2.09, -2.34, 0.9),
-    (-1.0, 2.0, 0.3),
-    (3.5, -1.0, 1.2),
-    (2.0, 3.0, 0.6),
-    (4.0, 4.0, -2.4),
-];
 
 fn random_scans(g: &ScanGeometry, count: usize, seed: u64) -> Vec<Scan> {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);

@@ -9,20 +9,12 @@ use std::hint::black_box;
 #[path = "common/paper_world.rs"]
 mod paper_world;
 
+use paper_world::POSES;
+
 use criterion::{Criterion, criterion_group, criterion_main};
 use expansion::Expander;
 use planner::{PlanRule, Planner, PlannerParams};
 use scan_types::{Pose2, ScanGeometry, WorldPoint};
-
-/// Free poses of the paper's world (see benches/expansion.rs).
-const POSES: [(f64, f64, f64); 6] = [
-    (-3.92, -4.26, 0.785),
-    (-2.09, -2.34, 0.9),
-    (-1.0, 2.0, 0.3),
-    (3.5, -1.0, 1.2),
-    (2.0, 3.0, 0.6),
-    (4.0, 4.0, -2.4),
-];
 
 fn bench_planner(c: &mut Criterion) {
     let world = sim_laser::World::paper();
