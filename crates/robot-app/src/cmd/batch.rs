@@ -11,7 +11,7 @@ use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use scan_types::{Pose2, WorldPoint};
 use serde::Serialize;
-use sim_laser::{SensorPreset, World};
+use sim_laser::{GenParams, SensorPreset, World, generate_world};
 
 use super::sim::{SimSpec, load_world, simulate};
 use crate::config::{Config, Method};
@@ -26,11 +26,21 @@ pub struct BatchArgs {
     /// Seeds A..B (B excluded): each seed gives one run per scenario and world.
     #[arg(long, default_value = "0..50", value_name = "A..B")]
     pub seeds: String,
-    /// Also run in K seeded random worlds (generated; corridors reported apart).
+    /// Also run in K seeded random worlds: rooms on both sides of a 1.6 m corridor, doors,
+    /// clutter (sim-laser's generator, seeds 0..K).
     #[arg(long, default_value_t = 0, value_name = "K")]
     pub random_worlds: usize,
-    /// Scenarios per seed: `paper` (the paper's start and target, paper world only),
-    /// `pairs` (a random start/target pair at least --min-distance apart), or both.
+    /// Also run in K seeded wide-corridor worlds (a 4 m wide, 24 m long empty corridor between
+    /// rooms; pairs lie in the corridor), reported apart as `corridor`.
+    #[arg(long, default_value_t = 0, value_name = "K")]
+    pub corridor_worlds: usize,
+    /// Random start/target pairs per world (default: one per seed). Pair i uses noise seed
+    /// A+i, so pairs are the same for every method.
+    #[arg(long, value_name = "N")]
+    pub random_pairs: Option<usize>,
+    /// Scenarios: `paper` (the paper's start and target in the paper world, or a generated
+    /// world's own start and target, once per seed), `pairs` (random start/target pairs at least
+    /// --min-distance apart in free space), or both.
     #[arg(long, default_value = "both", value_parser = ["paper", "pairs", "both"])]
     pub scenarios: String,
     /// Smallest start-target distance of a random pair, metres.
@@ -61,8 +71,12 @@ pub struct BatchArgs {
 pub struct BatchRow {
     /// Group the run is reported in.
     pub group: String,
+    /// World kind: `paper`, `random`, `corridor` or `file`.
+    pub kind: WorldKind,
     /// World name.
     pub world: String,
+    /// Pair index within its world (random pairs only).
+    pub pair: Option<usize>,
     /// Method.
     pub method: String,
     /// Seed.
@@ -102,6 +116,8 @@ pub struct BatchRow {
 pub struct Aggregate {
     /// Group.
     pub group: String,
+    /// World kind of the group's runs.
+    pub kind: WorldKind,
     /// Method.
     pub method: String,
     /// Runs.
@@ -122,7 +138,8 @@ pub struct Aggregate {
     pub median_legs: f64,
     /// Median CPU time per run, seconds.
     pub median_cpu_time_s: f64,
-    /// Count of runs per end reason.
+    /// Count of runs per end reason (`false_arrival`: the estimate reached the target, the
+    /// robot did not).
     pub reasons: std::collections::BTreeMap<String, usize>,
 }
 
@@ -135,13 +152,69 @@ struct BatchFile<'a> {
 
 struct Job {
     group: String,
+    kind: WorldKind,
+    pair: Option<usize>,
     spec: SimSpec,
 }
 
-/// The seeded random world `k` and the group it is reported in.
-pub fn random_world(k: u64) -> anyhow::Result<(World, String)> {
-    let _ = k;
-    bail!("--random-worlds: the world generator is not available in this build")
+/// What kind of world a run is in (batch rows and groups carry it).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum WorldKind {
+    /// The paper's world.
+    Paper,
+    /// A generated rooms-and-corridor world ([`random_world_params`]).
+    Random,
+    /// A generated wide-corridor world ([`corridor_world_params`]).
+    Corridor,
+    /// A world loaded from a file.
+    File,
+}
+
+impl std::fmt::Display for WorldKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Self::Paper => "paper",
+            Self::Random => "random",
+            Self::Corridor => "corridor",
+            Self::File => "file",
+        })
+    }
+}
+
+/// Generator parameters of the random worlds: sim-laser's defaults (16 m x 10 m, three rooms
+/// on each side of a 1.6 m corridor, doors, 8 boxes and 6 discs of clutter).
+pub fn random_world_params() -> GenParams {
+    GenParams::default()
+}
+
+/// Generator parameters of the wide-corridor worlds: 24 m x 12 m, a 4 m wide corridor with
+/// nothing in it between four rooms on each side (the case the paper warns about: long
+/// parallel walls with few range jumps).
+pub fn corridor_world_params() -> GenParams {
+    GenParams {
+        width_m: 24.0,
+        height_m: 12.0,
+        rooms_per_side: 4,
+        corridor_width_m: 4.0,
+        ..GenParams::default()
+    }
+}
+
+/// A generated world of `kind` (`Random` or `Corridor`) from seed `k`, with its own start and
+/// target.
+pub fn generated_world(kind: WorldKind, k: u64) -> anyhow::Result<(World, Pose2, WorldPoint)> {
+    let params = match kind {
+        WorldKind::Corridor => corridor_world_params(),
+        _ => random_world_params(),
+    };
+    let d = generate_world(k, &params).with_context(|| format!("generating {kind} world {k}"))?;
+    let world = d
+        .to_world()
+        .with_context(|| format!("building {kind} world {k}"))?;
+    let [sx, sy, st] = d.start.unwrap_or([0.0; 3]);
+    let [tx, ty] = d.target.unwrap_or([0.0; 2]);
+    Ok((world, Pose2::new(sx, sy, st), WorldPoint::new(tx, ty)))
 }
 
 /// Parses `A..B` (B excluded) or a single seed.
@@ -231,18 +304,52 @@ impl FreeSpace {
 
     /// A random start pose and target in one connected free region, at least `min_m` apart.
     pub fn random_pair(&self, rng: &mut ChaCha8Rng, min_m: f64) -> Option<(Pose2, WorldPoint)> {
-        let cells: Vec<usize> = (0..self.component.len())
+        self.random_pair_where(rng, min_m, |_| true)
+    }
+
+    /// The centre of cell `k`.
+    fn centre(&self, k: usize) -> WorldPoint {
+        WorldPoint::new(
+            self.lo.x_m() + ((k % self.nx) as f64 + 0.5) * self.cell_m,
+            self.lo.y_m() + ((k / self.nx) as f64 + 0.5) * self.cell_m,
+        )
+    }
+
+    /// Free cells (centres) in connected region order.
+    pub fn free_cells(&self) -> impl Iterator<Item = WorldPoint> + '_ {
+        (0..self.component.len())
             .filter(|&k| self.component[k] != 0)
+            .map(|k| self.centre(k))
+    }
+
+    /// Whether `p` is a free cell, and its region.
+    pub fn region_of(&self, p: WorldPoint) -> Option<u32> {
+        let fx = (p.x_m() - self.lo.x_m()) / self.cell_m;
+        let fy = (p.y_m() - self.lo.y_m()) / self.cell_m;
+        if !(fx >= 0.0 && fy >= 0.0) {
+            return None;
+        }
+        let (ix, iy) = (fx as usize, fy as usize);
+        if ix >= self.nx || iy >= self.ny {
+            return None;
+        }
+        Some(self.component[iy * self.nx + ix]).filter(|&c| c != 0)
+    }
+
+    /// As [`FreeSpace::random_pair`], with both ends where `keep` holds.
+    pub fn random_pair_where(
+        &self,
+        rng: &mut ChaCha8Rng,
+        min_m: f64,
+        keep: impl Fn(WorldPoint) -> bool,
+    ) -> Option<(Pose2, WorldPoint)> {
+        let cells: Vec<usize> = (0..self.component.len())
+            .filter(|&k| self.component[k] != 0 && keep(self.centre(k)))
             .collect();
         if cells.is_empty() {
             return None;
         }
-        let centre = |k: usize| {
-            WorldPoint::new(
-                self.lo.x_m() + ((k % self.nx) as f64 + 0.5) * self.cell_m,
-                self.lo.y_m() + ((k / self.nx) as f64 + 0.5) * self.cell_m,
-            )
-        };
+        let centre = |k: usize| self.centre(k);
         for _ in 0..10_000 {
             let a = cells[rng.random_range(0..cells.len())];
             let b = cells[rng.random_range(0..cells.len())];
@@ -256,7 +363,6 @@ impl FreeSpace {
             let heading = rng.random_range(-std::f64::consts::PI..std::f64::consts::PI);
             return Some((Pose2::new(pa.x_m(), pa.y_m(), heading), pb));
         }
-        let _ = self.ny;
         None
     }
 }
@@ -281,15 +387,15 @@ fn percentile(v: &mut [f64], q: f64) -> f64 {
 
 /// Aggregates rows per group and method, in first-seen order.
 pub fn aggregate(rows: &[BatchRow]) -> Vec<Aggregate> {
-    let mut keys: Vec<(String, String)> = Vec::new();
+    let mut keys: Vec<(String, String, WorldKind)> = Vec::new();
     for r in rows {
-        let k = (r.group.clone(), r.method.clone());
-        if !keys.contains(&k) {
+        let k = (r.group.clone(), r.method.clone(), r.kind);
+        if !keys.iter().any(|(g, m, _)| *g == k.0 && *m == k.1) {
             keys.push(k);
         }
     }
     keys.into_iter()
-        .map(|(group, method)| {
+        .map(|(group, method, kind)| {
             let sel: Vec<&BatchRow> = rows
                 .iter()
                 .filter(|r| r.group == group && r.method == method)
@@ -305,7 +411,13 @@ pub fn aggregate(rows: &[BatchRow]) -> Vec<Aggregate> {
             let mut cpu: Vec<f64> = sel.iter().map(|r| r.cpu_time_s).collect();
             let mut reasons = std::collections::BTreeMap::new();
             for r in &sel {
-                *reasons.entry(r.reason.to_string()).or_insert(0) += 1;
+                // The estimate said "reached" but the robot is not at the target.
+                let key = if r.reason == Reason::Reached && !r.reached {
+                    "false_arrival".to_string()
+                } else {
+                    r.reason.to_string()
+                };
+                *reasons.entry(key).or_insert(0) += 1;
             }
             Aggregate {
                 runs,
@@ -323,6 +435,7 @@ pub fn aggregate(rows: &[BatchRow]) -> Vec<Aggregate> {
                 median_cpu_time_s: median(&mut cpu),
                 reasons,
                 group,
+                kind,
                 method,
             }
         })
@@ -335,8 +448,9 @@ pub fn table(aggs: &[Aggregate]) -> String {
     let mut s = String::new();
     let _ = writeln!(
         s,
-        "{:<22} {:<9} {:>5} {:>8} {:>6} {:>10} {:>9} {:>9} {:>6} {:>8}  reasons",
+        "{:<20} {:<8} {:<9} {:>5} {:>8} {:>6} {:>10} {:>9} {:>9} {:>6} {:>8}  reasons",
         "group",
+        "kind",
         "method",
         "runs",
         "success",
@@ -351,8 +465,9 @@ pub fn table(aggs: &[Aggregate]) -> String {
         let reasons: Vec<String> = a.reasons.iter().map(|(k, v)| format!("{k}:{v}")).collect();
         let _ = writeln!(
             s,
-            "{:<22} {:<9} {:>5} {:>7.1}% {:>6} {:>10.3} {:>9.3} {:>9.3} {:>6.0} {:>8.3}  {}",
+            "{:<20} {:<8} {:<9} {:>5} {:>7.1}% {:>6} {:>10.3} {:>9.3} {:>9.3} {:>6.0} {:>8.3}  {}",
             a.group,
+            a.kind,
             a.method,
             a.runs,
             a.success_pct,
@@ -384,12 +499,25 @@ pub fn run(args: BatchArgs) -> anyhow::Result<()> {
         .iter()
         .map(|m| Config::load(args.config.as_deref(), Some(*m)))
         .collect::<anyhow::Result<_>>()?;
-    let paper_scenario = args.scenarios != "pairs";
+    let own_scenario = args.scenarios != "pairs";
     let pairs = args.scenarios != "paper";
+    let n_pairs = args
+        .random_pairs
+        .unwrap_or((seeds.end - seeds.start) as usize);
 
-    // Worlds: (world, name, group prefix, is the paper's world).
-    let mut worlds: Vec<(Arc<World>, String, String, bool)> = Vec::new();
-    let names = if args.worlds.is_empty() && args.random_worlds == 0 {
+    struct WorldEntry {
+        world: Arc<World>,
+        name: String,
+        kind: WorldKind,
+        /// The world's own scenario (paper's start/target, or the generator's).
+        scenario: Option<(Pose2, WorldPoint)>,
+        /// Salt of the pair generator (0 for the paper world and files).
+        salt: u64,
+        /// Corridor half-width (pairs must lie inside the corridor), metres.
+        corridor_half_m: Option<f64>,
+    }
+    let mut worlds: Vec<WorldEntry> = Vec::new();
+    let names = if args.worlds.is_empty() && args.random_worlds == 0 && args.corridor_worlds == 0 {
         vec!["paper".to_string()]
     } else {
         args.worlds.clone()
@@ -397,56 +525,106 @@ pub fn run(args: BatchArgs) -> anyhow::Result<()> {
     for w in &names {
         if w == "paper" {
             let (world, name) = load_world(None)?;
-            worlds.push((world, name, "paper".into(), true));
+            worlds.push(WorldEntry {
+                world,
+                name,
+                kind: WorldKind::Paper,
+                scenario: Some((
+                    crate::simsetup::paper_start(),
+                    crate::simsetup::paper_target(),
+                )),
+                salt: 0,
+                corridor_half_m: None,
+            });
         } else {
             let (world, name) = load_world(Some(std::path::Path::new(w)))?;
-            worlds.push((world, name.clone(), name, false));
+            worlds.push(WorldEntry {
+                world,
+                name,
+                kind: WorldKind::File,
+                scenario: None,
+                salt: 0,
+                corridor_half_m: None,
+            });
         }
     }
-    for k in 0..args.random_worlds {
-        let (world, group) = random_world(k as u64)?;
-        worlds.push((Arc::new(world), format!("random-{k}"), group, false));
+    let room = configs[0].robot.radius_m + 0.1;
+    for (kind, count) in [
+        (WorldKind::Random, args.random_worlds),
+        (WorldKind::Corridor, args.corridor_worlds),
+    ] {
+        for k in 0..count as u64 {
+            let (world, start, target) = generated_world(kind, k)?;
+            let salt = (k + 1) << 32
+                | if kind == WorldKind::Corridor {
+                    1 << 31
+                } else {
+                    0
+                };
+            worlds.push(WorldEntry {
+                world: Arc::new(world),
+                name: format!("{kind}-{k}"),
+                kind,
+                scenario: Some((start, target)),
+                salt,
+                corridor_half_m: (kind == WorldKind::Corridor)
+                    .then(|| corridor_world_params().corridor_width_m / 2.0 - room),
+            });
+        }
     }
 
-    let room = configs[0].robot.radius_m + 0.1;
     let mut jobs: Vec<Job> = Vec::new();
-    for (world, name, group, is_paper) in &worlds {
-        let free = if pairs {
-            Some(FreeSpace::new(world, room, 0.1))
-        } else {
-            None
+    for w in &worlds {
+        let prefix = match w.kind {
+            WorldKind::File => w.name.clone(),
+            k => k.to_string(),
         };
-        for seed in seeds.clone() {
+        let spec = |start: Pose2, goal: WorldPoint, seed: u64, cfg: &Config| SimSpec {
+            world: w.world.clone(),
+            world_name: w.name.clone(),
+            start,
+            goal,
+            sensor,
+            seed,
+            noise: true,
+            config: cfg.clone(),
+        };
+        if let (true, Some((start, goal))) = (own_scenario, w.scenario) {
+            for seed in seeds.clone() {
+                for cfg in &configs {
+                    jobs.push(Job {
+                        group: format!("{prefix}-scenario"),
+                        kind: w.kind,
+                        pair: None,
+                        spec: spec(start, goal, seed, cfg),
+                    });
+                }
+            }
+        }
+        if !pairs || n_pairs == 0 {
+            continue;
+        }
+        let free = FreeSpace::new(&w.world, room, 0.1);
+        for i in 0..n_pairs {
+            let seed = seeds.start + i as u64;
+            let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x5eed_0000_0000 ^ w.salt);
+            let pair = match w.corridor_half_m {
+                Some(h) => {
+                    free.random_pair_where(&mut rng, args.min_distance, |p| p.y_m().abs() <= h)
+                }
+                None => free.random_pair(&mut rng, args.min_distance),
+            };
+            let Some((start, goal)) = pair else {
+                tracing::warn!(world = %w.name, seed, "no start/target pair far enough apart");
+                continue;
+            };
             for cfg in &configs {
-                if *is_paper && paper_scenario {
-                    let mut spec = SimSpec::paper(seed, cfg.clone());
-                    spec.sensor = sensor;
-                    spec.world = world.clone();
-                    jobs.push(Job {
-                        group: "paper-scenario".into(),
-                        spec,
-                    });
-                }
-                if let Some(free) = &free {
-                    let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x5eed_0000_0000);
-                    let Some((start, goal)) = free.random_pair(&mut rng, args.min_distance) else {
-                        tracing::warn!(world = %name, seed, "no start/target pair far enough apart");
-                        continue;
-                    };
-                    jobs.push(Job {
-                        group: format!("{group}-pairs"),
-                        spec: SimSpec {
-                            world: world.clone(),
-                            world_name: name.clone(),
-                            start,
-                            goal,
-                            sensor,
-                            seed,
-                            noise: true,
-                            config: cfg.clone(),
-                        },
-                    });
-                }
+                jobs.push(Job {
+                    group: format!("{prefix}-pairs"),
+                    kind: w.kind,
+                    pair: Some(i),
+                    spec: spec(start, goal, seed, cfg),
+                });
             }
         }
     }
@@ -471,8 +649,8 @@ pub fn run(args: BatchArgs) -> anyhow::Result<()> {
                 let run = simulate(&job.spec, None);
                 if let Some(dir) = &keep {
                     let sub = dir.join(format!(
-                        "{}-{}-{}",
-                        job.group, job.spec.config.method, job.spec.seed
+                        "{}-{}-{}-{}",
+                        job.group, job.spec.world_name, job.spec.config.method, job.spec.seed
                     ));
                     super::sim::write_outputs(&sub, &run, &sub.display().to_string())?;
                 }
@@ -480,7 +658,9 @@ pub fn run(args: BatchArgs) -> anyhow::Result<()> {
                 let s = run.summary;
                 Ok(BatchRow {
                     group: job.group.clone(),
+                    kind: job.kind,
                     world: job.spec.world_name.clone(),
+                    pair: job.pair,
                     method: s.method,
                     seed: job.spec.seed,
                     start: s.start,
@@ -544,7 +724,9 @@ mod tests {
     fn row(group: &str, reached: bool, err: f64) -> BatchRow {
         BatchRow {
             group: group.into(),
+            kind: WorldKind::Paper,
             world: "w".into(),
+            pair: None,
             method: "goalseek".into(),
             seed: 0,
             start: [0.0; 3],
@@ -583,5 +765,35 @@ mod tests {
         assert!((a[0].median_final_error_m - 0.02).abs() < 1e-12);
         assert_eq!(a[0].reasons["leg_limit"], 1);
         assert!(table(&a).lines().count() == 3);
+    }
+
+    #[test]
+    fn random_pairs_are_free_far_apart_and_in_the_corridor() {
+        for kind in [WorldKind::Random, WorldKind::Corridor] {
+            let (world, start, target) = generated_world(kind, 3).unwrap();
+            // The generator's own scenario is free for a 0.3 m robot.
+            assert!(!world.disc_collides(start.position(), 0.3));
+            assert!(!world.disc_collides(target, 0.3));
+            let free = FreeSpace::new(&world, 0.4, 0.1);
+            let half = corridor_world_params().corridor_width_m / 2.0 - 0.4;
+            for i in 0..5u64 {
+                let mut rng = ChaCha8Rng::seed_from_u64(i);
+                let (s, g) = if kind == WorldKind::Corridor {
+                    free.random_pair_where(&mut rng, 6.0, |p| p.y_m().abs() <= half)
+                } else {
+                    free.random_pair(&mut rng, 6.0)
+                }
+                .unwrap();
+                assert!(s.position().distance_m(&g) >= 6.0);
+                // At least the robot radius plus 0.1 m from every obstacle.
+                assert!(!world.disc_collides(s.position(), 0.4));
+                assert!(!world.disc_collides(g, 0.4));
+                assert_eq!(free.region_of(s.position()), free.region_of(g));
+                if kind == WorldKind::Corridor {
+                    // The corridor is 4 m wide around y = 0.
+                    assert!(s.y_m.abs() <= 1.6 && g.y_m().abs() <= 1.6);
+                }
+            }
+        }
     }
 }
