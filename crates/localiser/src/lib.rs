@@ -27,6 +27,7 @@ mod grid;
 mod io;
 mod pointmap;
 mod rotation;
+mod scanmatch;
 mod triangle;
 
 pub use error::LocaliserError;
@@ -37,6 +38,7 @@ pub use rotation::{
     HeadingRule, RotationEstimate, RotationParams, heading_after_rotation, measure_rotation,
     measure_rotation_with,
 };
+pub use scanmatch::{MatchParams, MatchTarget, ScanMatch};
 pub use triangle::{
     Arrival, ArrivalHow, ArrivalParams, ArrivalRule, Side, Triangle, check_arrival,
     travelled_from_fallback, triangle,

@@ -83,6 +83,21 @@ pub struct PlannerCfg {
     pub max_leg_m: f64,
     /// Cell size of the planner's own obstacle grid (map_path), metres.
     pub grid_resolution_m: f64,
+    /// A ray's clearance is the smallest over the rays within this bearing of it, degrees
+    /// (the robot's width; the same window checks the way ahead after the rotation). 0 = the
+    /// ray alone (the paper).
+    pub width_window_deg: f64,
+}
+
+/// Where the distance driven on a leg comes from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum TravelRuleCfg {
+    /// The paper: the tracked landmark (OB minus its current distance ahead), else the command.
+    Landmark,
+    /// goalseek: the landmark's figure refined by matching the scan at the leg's end against
+    /// the scans at its start (point-to-line ICP), which also measures the sideways drift.
+    ScanMatched,
 }
 
 /// Landmark detection and selection.
@@ -125,6 +140,10 @@ pub struct LocaliserCfg {
     pub heading_rule: HeadingRuleCfg,
     /// Half-width of the search around the commanded rotation, degrees.
     pub rotation_search_deg: f64,
+    /// Travel rule of a leg.
+    pub travel_rule: TravelRuleCfg,
+    /// While driving, a new reference scan for matching every this many metres.
+    pub keyframe_m: f64,
     /// Occupancy grid cell size, metres.
     pub map_resolution_m: f64,
 }
@@ -183,6 +202,7 @@ impl Config {
                 min_travel_m: 0.3,
                 max_leg_m: 3.0,
                 grid_resolution_m: 0.1,
+                width_window_deg: 2.0,
             },
             landmarks: LandmarkCfg {
                 neighbour_n: 1,
@@ -201,6 +221,8 @@ impl Config {
             localiser: LocaliserCfg {
                 heading_rule: HeadingRuleCfg::ScanMeasured,
                 rotation_search_deg: 6.0,
+                travel_rule: TravelRuleCfg::ScanMatched,
+                keyframe_m: 1.0,
                 map_resolution_m: 0.05,
             },
             navigator: NavigatorCfg {
@@ -217,9 +239,11 @@ impl Config {
                 c.method = Method::Paper;
                 c.robot.expansion_margin_m = 0.0;
                 c.planner.rule = PlanRuleCfg::Greedy;
+                c.planner.width_window_deg = 0.0;
                 c.landmarks.range_limit_margin_m = 0.0;
                 c.tracking.gate_m = 0.2;
                 c.localiser.heading_rule = HeadingRuleCfg::Commanded;
+                c.localiser.travel_rule = TravelRuleCfg::Landmark;
                 c
             }
         }
@@ -292,6 +316,7 @@ impl Config {
         pos("planner.min_travel_m", self.planner.min_travel_m)?;
         pos("planner.max_leg_m", self.planner.max_leg_m)?;
         pos("planner.grid_resolution_m", self.planner.grid_resolution_m)?;
+        nonneg("planner.width_window_deg", self.planner.width_window_deg)?;
         pos("landmarks.max_bearing_deg", self.landmarks.max_bearing_deg)?;
         nonneg(
             "landmarks.range_limit_margin_m",
@@ -309,6 +334,7 @@ impl Config {
             "localiser.rotation_search_deg",
             self.localiser.rotation_search_deg,
         )?;
+        pos("localiser.keyframe_m", self.localiser.keyframe_m)?;
         pos(
             "localiser.map_resolution_m",
             self.localiser.map_resolution_m,

@@ -14,7 +14,7 @@ use localiser::OccupancyGrid;
 use planner::{Plan, Planner};
 use scan_types::{LaserSource, MotionBase, Pose2, Scan, ScanGeometry, WorldPoint};
 
-use crate::config::{Config, HeadingRuleCfg, Method};
+use crate::config::{Config, HeadingRuleCfg, Method, TravelRuleCfg};
 use crate::outputs::{LegRecord, Reason, RunLog};
 
 /// Read-only access to what only a simulator knows, for evaluation.
@@ -81,6 +81,7 @@ pub struct Navigator<'a, L: LaserSource, M: MotionBase + ?Sized> {
     estimate: Pose2,
     expander: Expander,
     clearances: Vec<f64>,
+    eroded: Vec<f64>,
     planner: Planner,
     grid: OccupancyGrid,
     detect_params: DetectParams,
@@ -134,6 +135,7 @@ impl<'a, L: LaserSource, M: MotionBase + ?Sized> Navigator<'a, L, M> {
         Self {
             expander: Expander::new(&geometry),
             clearances: vec![0.0; geometry.ray_count],
+            eroded: Vec::new(),
             laser,
             base,
             eval: None,
@@ -324,25 +326,40 @@ impl<'a, L: LaserSource, M: MotionBase + ?Sized> Navigator<'a, L, M> {
     }
 
     /// Drives straight up to `limit_m`, tracking `landmark` (first seen at the current pose
-    /// `origin`), stopping when the side ray sees it if `stop_at_side`. Returns the distance
-    /// travelled as measured from the landmark (commanded distance when nothing was tracked)
-    /// and the last scan.
+    /// `origin`), stopping when the side ray sees it if `stop_at_side`. Returns the pose
+    /// reached relative to the start of the drive and the last scan: the distance travelled
+    /// as measured from the landmark (commanded distance when nothing was tracked), refined
+    /// by scan matching under [`TravelRuleCfg::ScanMatched`].
     fn drive(
         &mut self,
         limit_m: f64,
         landmark: Option<Landmark>,
         stop_at_side: bool,
         mut last_scan: Scan,
-    ) -> Step<(f64, Scan)> {
+    ) -> Step<(Pose2, Scan)> {
         let step_m = self.cfg.tracking.step_m;
         let mut tracker = landmark.map(|l| Tracker::new(l, self.track_params));
         let ob0 = landmark.map(|l| l.range_m * l.bearing_rad.cos());
+        let matching = self.cfg.localiser.travel_rule == TravelRuleCfg::ScanMatched;
+        let match_params = localiser::MatchParams::default();
+        // The reference scan for matching: its pose relative to the start of the drive, the
+        // measured travel there, and the scan.
+        let mut key = matching.then(|| {
+            (
+                Pose2::default(),
+                0.0f64,
+                localiser::MatchTarget::from_scan(&self.geometry, &last_scan, &match_params),
+            )
+        });
         let mut commanded = 0.0f64;
         // Measured travel at the last fix and the commanded travel at that fix.
         let mut fix: Option<(f64, f64)> = None;
+        let measured_at = |fix: Option<(f64, f64)>, commanded: f64| {
+            fix.map_or(commanded, |(m, c)| m + commanded - c)
+        };
         while commanded < limit_m - 1e-6 {
             // Aim the last step at B itself when the landmark gives its distance.
-            let measured_now = fix.map_or(commanded, |(m, c)| m + commanded - c);
+            let measured_now = measured_at(fix, commanded);
             let to_go = if stop_at_side {
                 match ob0 {
                     Some(ob) => (ob - measured_now).max(0.01),
@@ -358,29 +375,78 @@ impl<'a, L: LaserSource, M: MotionBase + ?Sized> Navigator<'a, L, M> {
             self.forward(step)?;
             commanded += step;
             last_scan = self.scan()?;
-            let Some(t) = tracker.as_mut() else { continue };
-            match t.update(&self.geometry, &last_scan, commanded) {
-                TrackUpdate::Tracked(l) => {
-                    let measured = ob0.unwrap_or(0.0) - l.range_m * l.bearing_rad.cos();
-                    fix = Some((measured, commanded));
-                    if stop_at_side
-                        && l.bearing_rad.abs() >= SIDE_RAD - 0.5 * self.geometry.increment_rad.abs()
-                    {
-                        break;
+            if let Some(t) = tracker.as_mut() {
+                match t.update(&self.geometry, &last_scan, commanded) {
+                    TrackUpdate::Tracked(l) => {
+                        let measured = ob0.unwrap_or(0.0) - l.range_m * l.bearing_rad.cos();
+                        fix = Some((measured, commanded));
+                        if stop_at_side
+                            && l.bearing_rad.abs()
+                                >= SIDE_RAD - 0.5 * self.geometry.increment_rad.abs()
+                        {
+                            break;
+                        }
                     }
-                }
-                TrackUpdate::Predicted(_) => {}
-                TrackUpdate::Lost => {
-                    tracing::debug!(commanded, "landmark lost while driving");
-                    if stop_at_side {
-                        break;
+                    TrackUpdate::Predicted(_) => {}
+                    TrackUpdate::Lost => {
+                        tracing::debug!(commanded, "landmark lost while driving");
+                        if stop_at_side {
+                            break;
+                        }
+                        tracker = None;
                     }
-                    tracker = None;
                 }
             }
+            // A new reference scan every `keyframe_m` while scan matching.
+            let measured = measured_at(fix, commanded);
+            if let Some((pose, at, target)) = key.as_mut()
+                && measured - *at >= self.cfg.localiser.keyframe_m
+            {
+                *pose = self.matched(target, pose, measured - *at, &last_scan, &match_params);
+                *at = measured;
+                *target =
+                    localiser::MatchTarget::from_scan(&self.geometry, &last_scan, &match_params);
+            }
         }
-        let measured = fix.map_or(commanded, |(m, c)| m + commanded - c);
-        Ok((measured, last_scan))
+        let measured = measured_at(fix, commanded);
+        let rel = match key.as_mut() {
+            Some((pose, at, target)) => {
+                self.matched(target, pose, measured - *at, &last_scan, &match_params)
+            }
+            None => Pose2::new(measured, 0.0, 0.0),
+        };
+        Ok((rel, last_scan))
+    }
+
+    /// The pose of `scan` relative to the start of the drive: matched against `target` (the
+    /// reference scan taken at `key`), starting from `key` advanced by `ahead_m`; the guess
+    /// itself when the match fails.
+    fn matched(
+        &self,
+        target: &mut localiser::MatchTarget,
+        key: &Pose2,
+        ahead_m: f64,
+        scan: &Scan,
+        params: &localiser::MatchParams,
+    ) -> Pose2 {
+        let guess = Pose2::new(ahead_m, 0.0, 0.0);
+        match target.align(&self.geometry, scan, guess, params) {
+            Some(m) => {
+                tracing::debug!(
+                    ahead_m,
+                    dx = m.pose.x_m - ahead_m,
+                    dy = m.pose.y_m,
+                    rms = m.rms_m,
+                    pairs = m.pairs,
+                    "scan match"
+                );
+                key.compose(&m.pose)
+            }
+            None => {
+                tracing::debug!(ahead_m, "scan match failed; keeping the landmark's travel");
+                key.compose(&guess)
+            }
+        }
     }
 
     /// A landmark to measure travel by on a leg without a goal landmark: the nearest stable
@@ -449,6 +515,11 @@ impl<'a, L: LaserSource, M: MotionBase + ?Sized> Navigator<'a, L, M> {
             // 2-3. Expand and plan.
             let r = self.cfg.robot.radius_m + self.cfg.robot.expansion_margin_m;
             self.expander.clearances(&scan, r, &mut self.clearances);
+            let half = (self.cfg.planner.width_window_deg.to_radians()
+                / self.geometry.increment_rad.abs())
+            .ceil() as usize;
+            erode(&self.clearances, half, &mut self.eroded);
+            std::mem::swap(&mut self.clearances, &mut self.eroded);
             let plan = self.planner.plan(
                 &self.estimate,
                 &self.geometry,
@@ -509,8 +580,8 @@ impl<'a, L: LaserSource, M: MotionBase + ?Sized> Navigator<'a, L, M> {
                 // The goal is closer than any landmark: drive to it, measuring the travel
                 // on whatever feature stays in view.
                 let lm = self.any_landmark(&scan);
-                let (measured, last) = self.drive(goal_ahead, lm, false, scan)?;
-                self.estimate = origin.advanced(measured);
+                let (rel, last) = self.drive(goal_ahead, lm, false, scan)?;
+                self.estimate = origin.compose(&rel);
                 scan = last;
                 self.integrate(&scan);
                 self.record(None, None, &scan);
@@ -520,8 +591,8 @@ impl<'a, L: LaserSource, M: MotionBase + ?Sized> Navigator<'a, L, M> {
                 if self.first_leg.is_none() {
                     self.first_leg = Some((tri.landmark, tri.point_b));
                 }
-                let (measured, last) = self.drive(limit, Some(lm), true, scan)?;
-                self.estimate = origin.advanced(measured);
+                let (rel, last) = self.drive(limit, Some(lm), true, scan)?;
+                self.estimate = origin.compose(&rel);
                 scan = last;
                 // 8. Map with the localised scan.
                 self.integrate(&scan);
@@ -530,14 +601,24 @@ impl<'a, L: LaserSource, M: MotionBase + ?Sized> Navigator<'a, L, M> {
                 // No landmark in front: a short leg measured on any feature in view.
                 let lm = self.any_landmark(&scan);
                 let leg = limit.min(1.0);
-                let (measured, last) = self.drive(leg, lm, false, scan)?;
-                self.estimate = origin.advanced(measured);
+                let (rel, last) = self.drive(leg, lm, false, scan)?;
+                self.estimate = origin.compose(&rel);
                 scan = last;
                 self.integrate(&scan);
                 self.record(None, None, &scan);
             }
-            let progress =
-                before_leg.distance_m(&self.goal) - self.estimate.position().distance_m(&self.goal);
+            // Greedy: a leg that brings the robot no closer failed (the paper's rule turns in
+            // place forever behind a wall). MapPath: detours away from the target are how
+            // it leaves a dead end, so only a leg that hardly moved failed; the planner
+            // itself reports a target cut off on the map.
+            let moved = before_leg.distance_m(&self.estimate.position());
+            let progress = match self.cfg.planner.rule {
+                crate::config::PlanRuleCfg::Greedy => {
+                    before_leg.distance_m(&self.goal)
+                        - self.estimate.position().distance_m(&self.goal)
+                }
+                crate::config::PlanRuleCfg::MapPath => moved,
+            };
             if progress < 0.05 {
                 failures += 1;
             } else {
@@ -545,6 +626,19 @@ impl<'a, L: LaserSource, M: MotionBase + ?Sized> Navigator<'a, L, M> {
             }
         }
     }
+}
+
+/// `out[i]` = the smallest of `c[i - half ..= i + half]` (clamped to the scan): a ray's
+/// clearance for the robot's whole width.
+fn erode(c: &[f64], half: usize, out: &mut Vec<f64>) {
+    out.clear();
+    let n = c.len();
+    out.extend((0..n).map(|i| {
+        c[i.saturating_sub(half)..=(i + half).min(n - 1)]
+            .iter()
+            .copied()
+            .fold(f64::INFINITY, f64::min)
+    }));
 }
 
 /// The planner's parameters from the configuration.
@@ -560,5 +654,123 @@ pub fn planner_params(cfg: &Config) -> planner::PlannerParams {
         max_travel_m: cfg.planner.max_leg_m,
         grid_resolution_m: cfg.planner.grid_resolution_m,
         ..planner::PlannerParams::default()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::sync::Arc;
+
+    use sim_laser::{LaserNoise, MotionNoise, SensorPreset, Simulation, World, WorldDescription};
+
+    use super::*;
+
+    /// Sums each straight drive (the forward moves between two rotations).
+    struct Recorder<M> {
+        inner: M,
+        drives: Vec<f64>,
+    }
+
+    impl<M: MotionBase> MotionBase for Recorder<M> {
+        type Error = M::Error;
+        fn rotate(&mut self, angle_rad: f64) -> Result<(), Self::Error> {
+            self.drives.push(0.0);
+            self.inner.rotate(angle_rad)
+        }
+        fn forward(&mut self, distance_m: f64) -> Result<(), Self::Error> {
+            match self.drives.last_mut() {
+                Some(d) => *d += distance_m,
+                None => self.drives.push(distance_m),
+            }
+            self.inner.forward(distance_m)
+        }
+        fn stop(&mut self) -> Result<(), Self::Error> {
+            self.inner.stop()
+        }
+    }
+
+    /// Runs `cfg` without noise from `start` to `goal` in `world`; the outcome and the drives.
+    fn run(world: World, cfg: &Config, start: Pose2, goal: WorldPoint) -> (Outcome, Vec<f64>) {
+        let sim = Simulation::new(
+            Arc::new(world),
+            SensorPreset::Paper,
+            LaserNoise::off(),
+            MotionNoise::off(),
+            cfg.robot.radius_m,
+            start,
+            0,
+        );
+        let (mut laser, base, truth) = sim.split();
+        let mut rec = Recorder {
+            inner: base,
+            drives: Vec::new(),
+        };
+        let outcome = Navigator::new(&mut laser, &mut rec, cfg, start, goal)
+            .with_evaluation(&truth)
+            .run();
+        (outcome, rec.drives)
+    }
+
+    #[test]
+    fn erosion_takes_the_narrowest_ray_of_the_window() {
+        let c = [5.0, 4.0, 3.0, 9.0, 9.0, 9.0, 1.0];
+        let mut out = Vec::new();
+        erode(&c, 1, &mut out);
+        assert_eq!(out, vec![4.0, 3.0, 3.0, 3.0, 9.0, 1.0, 1.0]);
+        erode(&c, 0, &mut out);
+        assert_eq!(out, c.to_vec());
+    }
+
+    #[test]
+    fn planner_params_follow_the_config() {
+        let mut cfg = Config::default();
+        cfg.robot.radius_m = 0.25;
+        cfg.robot.expansion_margin_m = 0.05;
+        cfg.planner.min_travel_m = 0.4;
+        cfg.planner.max_leg_m = 1.5;
+        cfg.planner.grid_resolution_m = 0.2;
+        cfg.planner.rule = crate::config::PlanRuleCfg::Greedy;
+        let p = planner_params(&cfg);
+        assert_eq!(p.robot_radius_m, 0.25);
+        assert_eq!(p.margin_m, 0.05);
+        assert_eq!(p.min_travel_m, 0.4);
+        assert_eq!(p.max_travel_m, 1.5);
+        assert_eq!(p.grid_resolution_m, 0.2);
+        assert_eq!(p.rule, planner::PlanRule::Greedy);
+    }
+
+    #[test]
+    fn max_leg_caps_every_drive() {
+        let start = Pose2::new(-3.92, -4.26, 45f64.to_radians());
+        let goal = WorldPoint::new(4.0, 4.0);
+        let mut cfg = Config::default();
+        cfg.navigator.max_legs = 3;
+        let (_, drives) = run(World::paper(), &cfg, start, goal);
+        // The paper's first leg drives about 1.9 m to its B.
+        assert!(drives.iter().any(|&d| d > 1.0 + 1e-9), "{drives:?}");
+        cfg.planner.max_leg_m = 1.0;
+        let (_, drives) = run(World::paper(), &cfg, start, goal);
+        assert!(drives.iter().any(|&d| d > 0.5), "{drives:?}");
+        assert!(drives.iter().all(|&d| d <= 1.0 + 1e-9), "{drives:?}");
+    }
+
+    #[test]
+    fn a_walled_in_robot_stops_as_unreachable() {
+        // A closed 3 m x 3 m room; the target lies outside it.
+        let room = WorldDescription {
+            name: "closed room".into(),
+            bounds: Some(([-1.5, -1.5], [1.5, 1.5])),
+            boundary: true,
+            ..WorldDescription::default()
+        };
+        let cfg = Config::default();
+        let (outcome, _) = run(
+            room.to_world().unwrap(),
+            &cfg,
+            Pose2::new(0.0, 0.0, 0.0),
+            WorldPoint::new(4.0, 1.0),
+        );
+        assert_eq!(outcome.reason, Reason::Unreachable, "{}", outcome.note);
+        assert!(outcome.legs < cfg.navigator.max_legs, "{}", outcome.legs);
     }
 }

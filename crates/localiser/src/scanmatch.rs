@@ -1,0 +1,624 @@
+//! Scan matching: the pose of a scan relative to reference scans, by point-to-line ICP with a
+//! prior that holds the directions the geometry does not constrain (a corridor's length) at
+//! the initial guess.
+
+use scan_types::{Pose2, RobotPoint, Scan, ScanGeometry, normalize_angle_rad};
+
+/// Tuning of [`MatchTarget::align`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MatchParams {
+    /// Most Gauss-Newton iterations.
+    pub max_iterations: usize,
+    /// Correspondence gate of the first iteration, metres (covers the guess's error).
+    pub initial_gate_m: f64,
+    /// The gate shrinks by this factor per iteration down to `final_gate_m`.
+    pub gate_shrink: f64,
+    /// Correspondence gate once converged, metres.
+    pub final_gate_m: f64,
+    /// Scale of the Cauchy weight of a point-to-line residual, metres.
+    pub robust_scale_m: f64,
+    /// Standard deviation of one point-to-line residual, metres (weights data against the prior).
+    pub point_sigma_m: f64,
+    /// Standard deviation of the guess's position, metres.
+    pub prior_sigma_m: f64,
+    /// Standard deviation of the guess's heading, radians.
+    pub prior_sigma_rad: f64,
+    /// Fewest matched points (within the final gate) for a result.
+    pub min_pairs: usize,
+    /// Largest RMS point-to-line residual of the matched points, metres.
+    pub max_rms_m: f64,
+    /// Two hits within this of each other (and at most `normal_rays` rays apart) lie on one
+    /// surface for the normal fit, metres.
+    pub surface_m: f64,
+    /// Rays on each side used to fit a hit's surface normal.
+    pub normal_rays: usize,
+    /// Matched normals must agree within this angle, radians (front and back of a thin wall).
+    pub max_normal_angle_rad: f64,
+}
+
+impl Default for MatchParams {
+    /// 40 iterations, gate 0.3 m shrinking by 0.7 to 0.06 m, 2 cm Cauchy scale and point
+    /// sigma, prior 0.1 m / 2 deg, 40 pairs, RMS at most 3 cm, normals from +-3 rays within
+    /// 0.15 m, normals within 60 deg.
+    fn default() -> Self {
+        Self {
+            max_iterations: 40,
+            initial_gate_m: 0.3,
+            gate_shrink: 0.7,
+            final_gate_m: 0.06,
+            robust_scale_m: 0.02,
+            point_sigma_m: 0.02,
+            prior_sigma_m: 0.1,
+            prior_sigma_rad: 2f64.to_radians(),
+            min_pairs: 40,
+            max_rms_m: 0.03,
+            surface_m: 0.15,
+            normal_rays: 3,
+            max_normal_angle_rad: 60f64.to_radians(),
+        }
+    }
+}
+
+/// The result of a match.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ScanMatch {
+    /// The pose of the matched scan in the target's frame.
+    pub pose: Pose2,
+    /// RMS point-to-line residual of the matched points, metres.
+    pub rms_m: f64,
+    /// Points matched within the final gate.
+    pub pairs: usize,
+    /// Standard deviation of the position along its worst-constrained direction (data and
+    /// prior together), metres: near `prior_sigma_m` in a featureless corridor.
+    pub worst_sigma_m: f64,
+    /// Standard deviation of the position along its worst-constrained direction from the
+    /// data alone, metres (infinite when the data leave a direction free).
+    pub data_worst_sigma_m: f64,
+    /// Iterations run.
+    pub iterations: usize,
+}
+
+/// A hit point with its surface normal (unit, pointing toward the sensor that saw it).
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Oriented {
+    p: [f64; 2],
+    n: [f64; 2],
+}
+
+/// Reference points (hits with surface normals) in one frame, indexed for nearest-neighbour
+/// search.
+#[derive(Debug, Clone)]
+pub struct MatchTarget {
+    points: Vec<Oriented>,
+    cell_m: f64,
+    /// Lower-left corner of cell (0, 0) and the grid size.
+    origin: [f64; 2],
+    width: usize,
+    height: usize,
+    /// Cell start offsets into `order` (width * height + 1 entries) and the point indices
+    /// sorted by cell.
+    starts: Vec<u32>,
+    order: Vec<u32>,
+    dirty: bool,
+}
+
+impl Default for MatchTarget {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl MatchTarget {
+    /// An empty target.
+    pub fn new() -> Self {
+        Self {
+            points: Vec::new(),
+            cell_m: 0.25,
+            origin: [0.0, 0.0],
+            width: 0,
+            height: 0,
+            starts: Vec::new(),
+            order: Vec::new(),
+            dirty: false,
+        }
+    }
+
+    /// A target holding one scan, in that scan's own frame.
+    pub fn from_scan(geometry: &ScanGeometry, scan: &Scan, params: &MatchParams) -> Self {
+        let mut t = Self::new();
+        t.add_scan(&Pose2::default(), geometry, scan, params);
+        t
+    }
+
+    /// Number of reference points (hits with a fitted normal).
+    pub fn len(&self) -> usize {
+        self.points.len()
+    }
+
+    /// True when the target holds no point.
+    pub fn is_empty(&self) -> bool {
+        self.points.is_empty()
+    }
+
+    /// Adds the hits of `scan` taken at `pose` (in the target's frame) that have a surface normal.
+    pub fn add_scan(
+        &mut self,
+        pose: &Pose2,
+        geometry: &ScanGeometry,
+        scan: &Scan,
+        params: &MatchParams,
+    ) {
+        let (s, c) = pose.theta_rad.sin_cos();
+        for o in oriented_hits(geometry, scan, params) {
+            self.points.push(Oriented {
+                p: [
+                    pose.x_m + c * o.p[0] - s * o.p[1],
+                    pose.y_m + s * o.p[0] + c * o.p[1],
+                ],
+                n: [c * o.n[0] - s * o.n[1], s * o.n[0] + c * o.n[1]],
+            });
+        }
+        self.dirty = true;
+    }
+
+    fn index(&mut self) {
+        if !self.dirty {
+            return;
+        }
+        self.dirty = false;
+        if self.points.is_empty() {
+            self.width = 0;
+            self.height = 0;
+            self.starts.clear();
+            self.order.clear();
+            return;
+        }
+        let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+        for o in &self.points {
+            for k in 0..2 {
+                lo[k] = lo[k].min(o.p[k]);
+                hi[k] = hi[k].max(o.p[k]);
+            }
+        }
+        self.origin = lo;
+        self.width = ((hi[0] - lo[0]) / self.cell_m).floor() as usize + 1;
+        self.height = ((hi[1] - lo[1]) / self.cell_m).floor() as usize + 1;
+        let cells = self.width * self.height;
+        let mut counts = vec![0u32; cells + 1];
+        let cell_of: Vec<usize> = self.points.iter().map(|o| self.cell(o.p)).collect();
+        for &c in &cell_of {
+            counts[c + 1] += 1;
+        }
+        for i in 0..cells {
+            counts[i + 1] += counts[i];
+        }
+        let mut fill = counts.clone();
+        self.order = vec![0; self.points.len()];
+        for (i, &c) in cell_of.iter().enumerate() {
+            self.order[fill[c] as usize] = i as u32;
+            fill[c] += 1;
+        }
+        self.starts = counts;
+    }
+
+    fn cell(&self, p: [f64; 2]) -> usize {
+        let cx = (((p[0] - self.origin[0]) / self.cell_m).floor() as usize).min(self.width - 1);
+        let cy = (((p[1] - self.origin[1]) / self.cell_m).floor() as usize).min(self.height - 1);
+        cy * self.width + cx
+    }
+
+    /// The reference point nearest `q` within `gate` whose normal agrees with `n`.
+    fn nearest(&self, q: [f64; 2], n: [f64; 2], gate: f64, min_cos: f64) -> Option<&Oriented> {
+        if self.width == 0 {
+            return None;
+        }
+        let fx = (q[0] - self.origin[0]) / self.cell_m;
+        let fy = (q[1] - self.origin[1]) / self.cell_m;
+        let reach = gate / self.cell_m;
+        let x0 = (fx - reach).floor().max(0.0);
+        let y0 = (fy - reach).floor().max(0.0);
+        let x1 = (fx + reach).floor().min((self.width - 1) as f64);
+        let y1 = (fy + reach).floor().min((self.height - 1) as f64);
+        if x0 > x1 || y0 > y1 {
+            return None;
+        }
+        let mut best: Option<(f64, &Oriented)> = None;
+        for cy in y0 as usize..=y1 as usize {
+            for cx in x0 as usize..=x1 as usize {
+                let c = cy * self.width + cx;
+                for &k in &self.order[self.starts[c] as usize..self.starts[c + 1] as usize] {
+                    let o = &self.points[k as usize];
+                    let d2 = (o.p[0] - q[0]).powi(2) + (o.p[1] - q[1]).powi(2);
+                    if d2 > gate * gate || o.n[0] * n[0] + o.n[1] * n[1] < min_cos {
+                        continue;
+                    }
+                    if best.is_none_or(|(b, _)| d2 < b) {
+                        best = Some((d2, o));
+                    }
+                }
+            }
+        }
+        best.map(|(_, o)| o)
+    }
+
+    /// The pose of `scan` in the target's frame, starting from `guess`; `None` when too few
+    /// points match or they fit badly.
+    pub fn align(
+        &mut self,
+        geometry: &ScanGeometry,
+        scan: &Scan,
+        guess: Pose2,
+        params: &MatchParams,
+    ) -> Option<ScanMatch> {
+        self.index();
+        let cur = oriented_hits(geometry, scan, params);
+        if cur.len() < params.min_pairs || self.points.len() < params.min_pairs {
+            return None;
+        }
+        let min_cos = params.max_normal_angle_rad.cos();
+        let w_pt = 1.0 / params.point_sigma_m.powi(2);
+        let prior = [
+            1.0 / params.prior_sigma_m.powi(2),
+            1.0 / params.prior_sigma_m.powi(2),
+            1.0 / params.prior_sigma_rad.powi(2),
+        ];
+        let g0 = [guess.x_m, guess.y_m, guess.theta_rad];
+        let mut x = g0;
+        let mut gate = params.initial_gate_m.max(params.final_gate_m);
+        let mut iterations = 0;
+        let mut last = None;
+        for it in 0..params.max_iterations.max(1) {
+            iterations = it + 1;
+            let (s, c) = x[2].sin_cos();
+            let mut h = [[0.0f64; 3]; 3];
+            let mut h_data = [[0.0f64; 3]; 3];
+            let mut g = [0.0f64; 3];
+            let (mut sq, mut pairs) = (0.0, 0usize);
+            for o in &cur {
+                let q = [
+                    x[0] + c * o.p[0] - s * o.p[1],
+                    x[1] + s * o.p[0] + c * o.p[1],
+                ];
+                let n_cur = [c * o.n[0] - s * o.n[1], s * o.n[0] + c * o.n[1]];
+                let Some(m) = self.nearest(q, n_cur, gate, min_cos) else {
+                    continue;
+                };
+                let r = m.n[0] * (q[0] - m.p[0]) + m.n[1] * (q[1] - m.p[1]);
+                // d q / d theta = (-s px - c py, c px - s py).
+                let dq = [-s * o.p[0] - c * o.p[1], c * o.p[0] - s * o.p[1]];
+                let j = [m.n[0], m.n[1], m.n[0] * dq[0] + m.n[1] * dq[1]];
+                let u = r / params.robust_scale_m;
+                let w = w_pt / (1.0 + u * u);
+                for a in 0..3 {
+                    g[a] += w * j[a] * r;
+                    for b in 0..3 {
+                        h[a][b] += w * j[a] * j[b];
+                        h_data[a][b] += w_pt * j[a] * j[b];
+                    }
+                }
+                if r.abs() <= params.final_gate_m {
+                    sq += r * r;
+                    pairs += 1;
+                }
+            }
+            let dx = [
+                x[0] - g0[0],
+                x[1] - g0[1],
+                normalize_angle_rad(x[2] - g0[2]),
+            ];
+            for a in 0..3 {
+                h[a][a] += prior[a];
+                g[a] += prior[a] * dx[a];
+            }
+            let step = solve3(&h, &[-g[0], -g[1], -g[2]])?;
+            for a in 0..3 {
+                x[a] += step[a];
+            }
+            x[2] = normalize_angle_rad(x[2]);
+            last = Some((h, h_data, sq, pairs));
+            let small = step[0].hypot(step[1]) < 1e-5 && step[2].abs() < 1e-5;
+            if small && gate <= params.final_gate_m {
+                break;
+            }
+            gate = (gate * params.gate_shrink).max(params.final_gate_m);
+        }
+        let (h, h_data, sq, pairs) = last?;
+        if pairs < params.min_pairs {
+            tracing::debug!(pairs, "scan match: too few pairs");
+            return None;
+        }
+        let rms = (sq / pairs as f64).sqrt();
+        if rms > params.max_rms_m {
+            tracing::debug!(rms, "scan match: poor fit");
+            return None;
+        }
+        Some(ScanMatch {
+            pose: Pose2::new(x[0], x[1], x[2]),
+            rms_m: rms,
+            pairs,
+            worst_sigma_m: worst_position_sigma(&h),
+            data_worst_sigma_m: worst_position_sigma(&h_data),
+            iterations,
+        })
+    }
+}
+
+/// Standard deviation along the worst direction of the position block of the covariance
+/// `h^-1` (3 x 3 information matrix: x, y, theta).
+fn worst_position_sigma(h: &[[f64; 3]; 3]) -> f64 {
+    // Marginal covariance of (x, y): the top-left block of h^-1, from the Schur complement
+    // of the heading entry.
+    let hth = h[2][2];
+    let (a, b, d) = if hth > 0.0 {
+        (
+            h[0][0] - h[0][2] * h[2][0] / hth,
+            h[0][1] - h[0][2] * h[2][1] / hth,
+            h[1][1] - h[1][2] * h[2][1] / hth,
+        )
+    } else {
+        (h[0][0], h[0][1], h[1][1])
+    };
+    // Smallest eigenvalue of the 2 x 2 information block [[a, b], [b, d]].
+    let mean = 0.5 * (a + d);
+    let rad = (0.25 * (a - d).powi(2) + b * b).sqrt();
+    let lmin = mean - rad;
+    if lmin > 1e-12 {
+        1.0 / lmin.sqrt()
+    } else {
+        f64::INFINITY
+    }
+}
+
+/// Solves the 3 x 3 system `a x = b` by Gaussian elimination with partial pivoting.
+fn solve3(a: &[[f64; 3]; 3], b: &[f64; 3]) -> Option<[f64; 3]> {
+    let mut m = [[0.0f64; 4]; 3];
+    for r in 0..3 {
+        m[r][..3].copy_from_slice(&a[r]);
+        m[r][3] = b[r];
+    }
+    for col in 0..3 {
+        let piv = (col..3).max_by(|&i, &j| m[i][col].abs().total_cmp(&m[j][col].abs()))?;
+        if m[piv][col].abs() < 1e-12 {
+            return None;
+        }
+        m.swap(col, piv);
+        for r in 0..3 {
+            if r != col {
+                let f = m[r][col] / m[col][col];
+                let pivot_row = m[col];
+                for (v, p) in m[r].iter_mut().zip(pivot_row).skip(col) {
+                    *v -= f * p;
+                }
+            }
+        }
+    }
+    let x = [m[0][3] / m[0][0], m[1][3] / m[1][1], m[2][3] / m[2][2]];
+    x.iter().all(|v| v.is_finite()).then_some(x)
+}
+
+/// The hits of `scan` (robot frame) with a surface normal fitted over their neighbours on the
+/// same surface; hits without a clear line through their neighbours are left out.
+fn oriented_hits(geometry: &ScanGeometry, scan: &Scan, params: &MatchParams) -> Vec<Oriented> {
+    let n = geometry.ray_count.min(scan.len());
+    let pts: Vec<Option<RobotPoint>> = (0..n)
+        .map(|i| {
+            scan.hit_range_m(i)
+                .filter(|r| r.is_finite() && *r > 0.0)
+                .map(|r| geometry.robot_point(i, r))
+        })
+        .collect();
+    let k = params.normal_rays.max(1);
+    let mut out = Vec::with_capacity(n);
+    for i in 0..n {
+        let Some(p) = pts[i] else { continue };
+        let (px, py) = (p.x_m(), p.y_m());
+        // Walk outwards on each side while the hits stay on the surface.
+        let mut members = vec![(px, py)];
+        for dir in [-1i64, 1] {
+            let mut prev = (px, py);
+            for step in 1..=k as i64 {
+                let j = i as i64 + dir * step;
+                if j < 0 || j >= n as i64 {
+                    break;
+                }
+                let Some(q) = pts[j as usize] else { break };
+                let q = (q.x_m(), q.y_m());
+                if (q.0 - prev.0).hypot(q.1 - prev.1) > params.surface_m {
+                    break;
+                }
+                members.push(q);
+                prev = q;
+            }
+        }
+        if members.len() < 3 {
+            continue;
+        }
+        let m = members.len() as f64;
+        let (mx, my) = members
+            .iter()
+            .fold((0.0, 0.0), |a, q| (a.0 + q.0 / m, a.1 + q.1 / m));
+        let (mut sxx, mut sxy, mut syy) = (0.0, 0.0, 0.0);
+        for q in &members {
+            let (dx, dy) = (q.0 - mx, q.1 - my);
+            sxx += dx * dx;
+            sxy += dx * dy;
+            syy += dy * dy;
+        }
+        // Direction of the fitted line: the principal axis; the normal is perpendicular.
+        let angle = 0.5 * (2.0 * sxy).atan2(sxx - syy);
+        let mean = 0.5 * (sxx + syy);
+        let rad = (0.25 * (sxx - syy).powi(2) + sxy * sxy).sqrt();
+        let (lmax, lmin) = (mean + rad, mean - rad);
+        // Not a line: scattered points (a corner's tip or noise as large as the spread).
+        if lmax <= 0.0 || lmin > 0.1 * lmax {
+            continue;
+        }
+        let mut nrm = [-angle.sin(), angle.cos()];
+        // Point the normal toward the sensor.
+        if nrm[0] * px + nrm[1] * py > 0.0 {
+            nrm = [-nrm[0], -nrm[1]];
+        }
+        out.push(Oriented {
+            p: [px, py],
+            n: nrm,
+        });
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Ray-casts `segments` from `pose` with the paper's geometry (no noise unless `noise`).
+    fn cast(segments: &[[f64; 4]], pose: Pose2, noise: Option<u64>) -> Scan {
+        let g = ScanGeometry::paper();
+        let mut state = noise.unwrap_or(0).wrapping_mul(6364136223846793005) | 1;
+        let mut uniform = || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((state >> 11) as f64) / ((1u64 << 53) as f64)
+        };
+        let ranges: Vec<f64> = (0..g.ray_count)
+            .map(|i| {
+                let a = pose.theta_rad + g.bearing_rad(i);
+                let (dx, dy) = (a.cos(), a.sin());
+                let mut best = g.max_range_m;
+                for s in segments {
+                    let (ex, ey) = (s[2] - s[0], s[3] - s[1]);
+                    let den = dx * ey - dy * ex;
+                    if den.abs() < 1e-12 {
+                        continue;
+                    }
+                    let (wx, wy) = (s[0] - pose.x_m, s[1] - pose.y_m);
+                    let t = (wx * ey - wy * ex) / den;
+                    let u = (wx * dy - wy * dx) / den;
+                    if t > 0.0 && (0.0..=1.0).contains(&u) && t < best {
+                        best = t;
+                    }
+                }
+                if noise.is_some() && best < g.max_range_m {
+                    // Uniform noise of standard deviation 1 cm.
+                    best += (uniform() - 0.5) * 0.01 * 12f64.sqrt();
+                }
+                best
+            })
+            .collect();
+        Scan::from_ranges(&g, &ranges, 0.0)
+    }
+
+    /// A 6 m x 4 m room centred on the origin with a 0.6 m box at (1.5, 1.0).
+    fn room() -> Vec<[f64; 4]> {
+        vec![
+            [-3.0, -2.0, 3.0, -2.0],
+            [3.0, -2.0, 3.0, 2.0],
+            [3.0, 2.0, -3.0, 2.0],
+            [-3.0, 2.0, -3.0, -2.0],
+            [1.2, 0.7, 1.8, 0.7],
+            [1.8, 0.7, 1.8, 1.3],
+            [1.8, 1.3, 1.2, 1.3],
+            [1.2, 1.3, 1.2, 0.7],
+        ]
+    }
+
+    #[test]
+    fn recovers_a_known_motion_in_a_room() {
+        let g = ScanGeometry::paper();
+        let p = MatchParams::default();
+        let a = Pose2::new(-1.0, -0.5, 0.3);
+        let b = Pose2::new(-0.4, -0.3, 0.35);
+        let rel = a.inverse().compose(&b);
+        let mut t = MatchTarget::from_scan(&g, &cast(&room(), a, None), &p);
+        // Guess 8 cm short and 3 cm aside, heading 1 deg off.
+        let guess = Pose2::new(rel.x_m - 0.08, rel.y_m + 0.03, rel.theta_rad + 0.017);
+        let m = t.align(&g, &cast(&room(), b, None), guess, &p).unwrap();
+        assert!((m.pose.x_m - rel.x_m).abs() < 2e-3, "{m:?} vs {rel:?}");
+        assert!((m.pose.y_m - rel.y_m).abs() < 2e-3, "{m:?} vs {rel:?}");
+        assert!((m.pose.theta_rad - rel.theta_rad).abs() < 1e-3, "{m:?}");
+        assert!(m.rms_m < 0.005 && m.pairs > 300, "{m:?}");
+        assert!(m.data_worst_sigma_m < 0.01, "{m:?}");
+    }
+
+    #[test]
+    fn noisy_scans_match_within_millimetres() {
+        let g = ScanGeometry::paper();
+        let p = MatchParams::default();
+        let a = Pose2::new(0.0, -1.0, 1.0);
+        let b = a.advanced(1.0);
+        let mut t = MatchTarget::from_scan(&g, &cast(&room(), a, Some(1)), &p);
+        let m = t
+            .align(
+                &g,
+                &cast(&room(), b, Some(2)),
+                Pose2::new(0.95, 0.0, 0.0),
+                &p,
+            )
+            .unwrap();
+        assert!((m.pose.x_m - 1.0).abs() < 0.005, "{m:?}");
+        assert!(m.pose.y_m.abs() < 0.005, "{m:?}");
+        assert!(m.pose.theta_rad.abs() < 0.002, "{m:?}");
+    }
+
+    #[test]
+    fn a_corridor_keeps_the_guess_along_its_length() {
+        let g = ScanGeometry::paper();
+        let p = MatchParams::default();
+        // Two parallel walls 1.6 m apart, far longer than the range.
+        let walls = [[-20.0, -0.8, 20.0, -0.8], [-20.0, 0.8, 20.0, 0.8]];
+        let a = Pose2::new(0.0, 0.0, 0.0);
+        let b = Pose2::new(0.5, 0.1, 0.0);
+        let mut t = MatchTarget::from_scan(&g, &cast(&walls, a, None), &p);
+        let m = t
+            .align(&g, &cast(&walls, b, None), Pose2::new(0.42, 0.0, 0.0), &p)
+            .unwrap();
+        // Across: measured; along: the data say nothing, the guess stays.
+        assert!((m.pose.y_m - 0.1).abs() < 1e-3, "{m:?}");
+        assert!((m.pose.x_m - 0.42).abs() < 1e-3, "{m:?}");
+        assert!(m.data_worst_sigma_m > 1.0, "{m:?}");
+        assert!((m.worst_sigma_m - p.prior_sigma_m).abs() < 0.01, "{m:?}");
+    }
+
+    #[test]
+    fn matches_against_two_scans_in_a_common_frame() {
+        let g = ScanGeometry::paper();
+        let p = MatchParams::default();
+        let a = Pose2::new(-2.0, -1.0, 0.0);
+        let b = Pose2::new(0.0, -1.0, 1.2);
+        let c = Pose2::new(0.3, 0.2, 2.0);
+        let mut t = MatchTarget::new();
+        t.add_scan(&a, &g, &cast(&room(), a, None), &p);
+        t.add_scan(&b, &g, &cast(&room(), b, None), &p);
+        let guess = Pose2::new(0.36, 0.16, 2.02);
+        let m = t.align(&g, &cast(&room(), c, None), guess, &p).unwrap();
+        assert!(m.pose.position().distance_m(&c.position()) < 2e-3, "{m:?}");
+        assert!((m.pose.theta_rad - 2.0).abs() < 1e-3, "{m:?}");
+    }
+
+    #[test]
+    fn nothing_to_match_is_none() {
+        let g = ScanGeometry::paper();
+        let p = MatchParams::default();
+        let open = Scan::from_ranges(&g, &vec![g.max_range_m; g.ray_count], 0.0);
+        let mut t = MatchTarget::from_scan(&g, &open, &p);
+        assert!(t.is_empty());
+        let s = cast(&room(), Pose2::default(), None);
+        assert!(t.align(&g, &s, Pose2::default(), &p).is_none());
+    }
+
+    #[test]
+    fn solves_a_small_system() {
+        // 2x + y = 5, x + 3y + z = 10, y + 4z = 11 -> (2, 1, 2.5).
+        let a = [[2.0, 1.0, 0.0], [1.0, 3.0, 1.0], [0.0, 1.0, 4.0]];
+        let x = solve3(&a, &[5.0, 7.5, 11.0]).unwrap();
+        assert!((x[0] - 2.0).abs() < 1e-12 && (x[1] - 1.0).abs() < 1e-12);
+        assert!((x[2] - 2.5).abs() < 1e-12);
+        assert!(
+            solve3(
+                &[[1.0, 0.0, 0.0], [2.0, 0.0, 0.0], [0.0, 0.0, 1.0]],
+                &[1.0; 3]
+            )
+            .is_none()
+        );
+    }
+}
