@@ -51,3 +51,16 @@ impl LoopOptions {
         Ok(config)
     }
 }
+
+/// A command that prints is done, not failed, when its reader goes away (`... | head`).
+pub fn reader_gone_is_ok(result: anyhow::Result<()>) -> anyhow::Result<()> {
+    match result {
+        Err(e)
+            if e.downcast_ref::<std::io::Error>()
+                .is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe) =>
+        {
+            Ok(())
+        }
+        other => other,
+    }
+}

@@ -44,16 +44,7 @@ pub struct ReplayArgs {
 /// Runs `robot-app replay`, printing to stdout.
 pub fn run(args: ReplayArgs) -> anyhow::Result<()> {
     let stdout = std::io::stdout();
-    match run_to(&args, &mut std::io::BufWriter::new(stdout.lock())) {
-        // The reader went away (`robot-app replay ... | head`): not an error.
-        Err(e)
-            if e.downcast_ref::<std::io::Error>()
-                .is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe) =>
-        {
-            Ok(())
-        }
-        other => other,
-    }
+    super::reader_gone_is_ok(run_to(&args, &mut std::io::BufWriter::new(stdout.lock())))
 }
 
 /// Runs `robot-app replay`, writing to `out`.

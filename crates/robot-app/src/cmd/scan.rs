@@ -61,22 +61,12 @@ pub type ScanSink<'a> = Box<dyn FnMut(&ScanGeometry, &Scan) -> anyhow::Result<()
 /// Runs `robot-app scan`, printing to stdout.
 pub fn run(args: ScanArgs) -> anyhow::Result<()> {
     let stdout = std::io::stdout();
-    match run_to(&args, &mut stdout.lock()) {
-        // The reader went away (`robot-app scan ... | head`): not an error.
-        Err(e)
-            if e.downcast_ref::<std::io::Error>()
-                .is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe) =>
-        {
-            Ok(())
-        }
-        other => other,
-    }
+    super::reader_gone_is_ok(run_to(&args, &mut stdout.lock()))
 }
 
 /// Runs `robot-app scan`, writing to `out`.
 pub fn run_to<W: Write>(args: &ScanArgs, out: &mut W) -> anyhow::Result<()> {
     let mut sink = match &args.record {
-        // ---- `--record` call site: the log helper (issue 8) wires MCAP recording here. ----
         Some(path) => Some(record_sink(path)?),
         None => None,
     };
