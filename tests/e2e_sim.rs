@@ -5,10 +5,19 @@
 //! from the geometry of the written files, never from the code under test.
 #![allow(clippy::print_stderr, clippy::print_stdout)] // tests report to the terminal
 
+use std::ffi::OsStr;
 use std::path::Path;
 
+use clap::Parser;
 use robot_app::cmd::sim::{SimArgs, SimSpec, simulate, write_outputs};
 use robot_app::config::{Config, Method};
+
+/// `robot-app sim`'s arguments on their own.
+#[derive(Parser)]
+struct SimCli {
+    #[command(flatten)]
+    args: SimArgs,
+}
 
 /// The paper's target and start (issue 7).
 const TARGET: (f64, f64) = (4.0, 4.0);
@@ -178,20 +187,17 @@ fn a_run_stopped_by_the_leg_limit_leaves_its_summary() {
     let cfg = dir.path().join("one-leg.toml");
     std::fs::write(&cfg, "[navigator]\nmax_legs = 1\n").unwrap();
     let out = dir.path().join("out");
-    let args = SimArgs {
-        world: None,
-        start: None,
-        goal: None,
-        sensor: "paper".into(),
-        seed: 3,
-        noise: "default".into(),
-        options: robot_app::cmd::LoopOptions {
-            config: Some(cfg),
-            method: None,
-            out: out.clone(),
-            record: None,
-        },
-    };
+    // Parsed as `robot-app sim` parses its command line.
+    let argv: [&OsStr; 7] = [
+        "sim".as_ref(),
+        "--seed".as_ref(),
+        "3".as_ref(),
+        "--config".as_ref(),
+        cfg.as_os_str(),
+        "--out".as_ref(),
+        out.as_os_str(),
+    ];
+    let args = SimCli::try_parse_from(argv).expect("arguments parse").args;
     let err = robot_app::cmd::sim::run(args).expect_err("one leg cannot reach the target");
     assert!(err.to_string().contains("leg_limit"), "{err}");
     let s = summary(&out);
