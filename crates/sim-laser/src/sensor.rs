@@ -233,41 +233,44 @@ pub fn cast_scan<R: Rng + ?Sized>(
     host_time_s: f64,
 ) -> Scan {
     let n = geometry.ray_count;
-    let mut scan = Scan {
-        ranges_m: Vec::with_capacity(n),
-        status: Vec::with_capacity(n),
-        intensities: None,
-        sensor_time_ms: Some((host_time_s * 1000.0).round().max(0.0) as u64),
-        host_time_s,
-    };
     let o = [pose.x_m, pose.y_m];
     let max = geometry.max_range_m;
-    let (inc_s, inc_c) = geometry.increment_rad.sin_cos();
-    let inc_cs = [inc_c, inc_s];
-    let mut step_dir = [1.0, 0.0];
-    for i in 0..n {
-        let dir = if noise.angular_sigma_rad > 0.0 {
-            let a =
-                pose.theta_rad + geometry.bearing_rad(i) + noise.angular_sigma_rad * normal(rng);
-            let (s, c) = a.sin_cos();
-            [c, s]
-        } else {
+    let angular = noise.angular_sigma_rad > 0.0;
+    // Without angular noise the directions need no random draws, so every ray is cast first
+    // (several at once); with it, each ray's draws come in ray order as before.
+    let mut ranges_m = vec![f64::INFINITY; n];
+    if !angular {
+        let (inc_s, inc_c) = geometry.increment_rad.sin_cos();
+        let mut step_dir = [1.0, 0.0];
+        let dir = |i: usize| {
             // Exact every 32 rays, rotated by the increment in between (error below 1e-14).
-            step_dir = if i % 32 == 0 {
+            step_dir = if i.is_multiple_of(32) {
                 let (s, c) = (pose.theta_rad + geometry.bearing_rad(i)).sin_cos();
                 [c, s]
             } else {
                 [
-                    step_dir[0] * inc_cs[0] - step_dir[1] * inc_cs[1],
-                    step_dir[0] * inc_cs[1] + step_dir[1] * inc_cs[0],
+                    step_dir[0] * inc_c - step_dir[1] * inc_s,
+                    step_dir[0] * inc_s + step_dir[1] * inc_c,
                 ]
             };
             step_dir
         };
-        let hit = world.raycast_dir(o, dir, max);
-        let (mut r, mut st) = match hit {
-            Some(t) if t < max => (t, RayStatus::Hit),
-            _ => (max, RayStatus::MaxRange),
+        world.raycast_many(o, dir, max, &mut ranges_m);
+    }
+    let mut status = Vec::with_capacity(n);
+    for (i, range) in ranges_m.iter_mut().enumerate() {
+        let hit = if angular {
+            let a =
+                pose.theta_rad + geometry.bearing_rad(i) + noise.angular_sigma_rad * normal(rng);
+            let (s, c) = a.sin_cos();
+            world.raycast_dir(o, [c, s], max).unwrap_or(f64::INFINITY)
+        } else {
+            *range
+        };
+        let (mut r, mut st) = if hit < max {
+            (hit, RayStatus::Hit)
+        } else {
+            (max, RayStatus::MaxRange)
         };
         if st == RayStatus::Hit {
             if r < geometry.min_range_m {
@@ -305,10 +308,16 @@ pub fn cast_scan<R: Rng + ?Sized>(
             st = RayStatus::Error(DROPOUT_CODE);
             r = f64::NAN;
         }
-        scan.ranges_m.push(r);
-        scan.status.push(st);
+        *range = r;
+        status.push(st);
     }
-    scan
+    Scan {
+        ranges_m,
+        status,
+        intensities: None,
+        sensor_time_ms: Some((host_time_s * 1000.0).round().max(0.0) as u64),
+        host_time_s,
+    }
 }
 
 /// The noise-free scan of `geometry` from `pose`.

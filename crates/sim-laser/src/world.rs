@@ -1,5 +1,6 @@
 //! The world: obstacles as grid cells (from bitmaps) and exact shapes (segments, circles,
-//! polygons), with a uniform-grid index and a chessboard distance field for fast exact ray casts.
+//! polygons), with a uniform-grid index, a chessboard distance field and per-quadrant empty squares
+//! for fast exact ray casts.
 
 use scan_types::{Pose2, WorldPoint};
 
@@ -157,6 +158,8 @@ enum Prim {
 const NO_POLY: u32 = u32::MAX;
 const EMPTY: u32 = 0;
 const SOLID: u32 = 1;
+/// Plane value of a cell holding shapes.
+const LIST: u8 = 255;
 
 /// The simulated world: where obstacles are. Cheap to share with `Arc`.
 ///
@@ -183,10 +186,14 @@ pub struct World {
     list_start: Vec<u32>,
     list_items: Vec<u32>,
     dist: Vec<u16>,
-    /// For the ray caster, per cell and per quadrant of travel (`4 * cell + q`, `q` = bit 0: +x,
-    /// bit 1: +y): the side, in cells, of the largest empty square with this cell at its corner
-    /// extending toward that quadrant (capped at 255); 0 for a non-empty cell.
-    quad: Vec<u8>,
+    /// For the ray caster, one plane per quadrant of travel `q` (bit 0: +x, bit 1: +y), indexed in
+    /// that quadrant's mirrored cell coordinates (see [`Ray`]): the side, in cells, of the largest
+    /// empty square with this cell at its corner extending toward the quadrant (at most 254);
+    /// 0 for a solid cell, [`LIST`] for a cell holding shapes.
+    planes: [Vec<u8>; 4],
+    /// 1 / cell width and 1 / cell height.
+    irx: f64,
+    iry: f64,
     prims: Vec<Prim>,
     polygons: Vec<Vec<[f64; 2]>>,
     obstacle_count: usize,
@@ -293,7 +300,9 @@ impl World {
             list_start: Vec::new(),
             list_items: Vec::new(),
             dist: Vec::new(),
-            quad: Vec::new(),
+            planes: Default::default(),
+            irx: 1.0 / rx,
+            iry: 1.0 / ry,
             prims: Vec::new(),
             polygons: Vec::new(),
             obstacle_count: parts.obstacles.len(),
@@ -471,41 +480,36 @@ impl World {
             }
         }
         self.dist = d.into_iter().map(|v| v as u16).collect();
-        self.quad = vec![0u8; 4 * nx * ny];
-        for q in 0..4usize {
+        for q in 0..4 {
             let (px, py) = (q & 1 == 1, q & 2 == 2);
-            let xs: Vec<usize> = if px {
-                (0..nx).rev().collect()
-            } else {
-                (0..nx).collect()
-            };
-            let ys: Vec<usize> = if py {
-                (0..ny).rev().collect()
-            } else {
-                (0..ny).collect()
-            };
-            let step = |v: usize, pos: bool, n: usize| -> Option<usize> {
-                if pos {
-                    (v + 1 < n).then_some(v + 1)
-                } else {
-                    v.checked_sub(1)
+            // Mirrored coordinates (mx, my): the quadrant's rays move toward +mx and +my.
+            let mut plane = vec![0u8; nx * ny];
+            let side = |plane: &[u8], mx: usize, my: usize| -> u32 {
+                if mx >= nx || my >= ny {
+                    return 255; // Squares may reach the grid's edge.
+                }
+                match plane[my * nx + mx] {
+                    LIST => 0,
+                    v => u32::from(v),
                 }
             };
-            for &y in &ys {
-                for &x in &xs {
-                    let i = y * nx + x;
-                    if self.cells[i] != EMPTY {
-                        continue;
-                    }
-                    let get = |xx: Option<usize>, yy: Option<usize>| match (xx, yy) {
-                        (Some(a), Some(b)) => self.quad[4 * (b * nx + a) + q] as u32,
-                        _ => 255,
+            for my in (0..ny).rev() {
+                let y = if py { my } else { ny - 1 - my };
+                for mx in (0..nx).rev() {
+                    let x = if px { mx } else { nx - 1 - mx };
+                    plane[my * nx + mx] = match self.cells[y * nx + x] {
+                        EMPTY => {
+                            let m = side(&plane, mx + 1, my)
+                                .min(side(&plane, mx, my + 1))
+                                .min(side(&plane, mx + 1, my + 1));
+                            (m + 1).min(u32::from(LIST) - 1) as u8
+                        }
+                        SOLID => 0,
+                        _ => LIST,
                     };
-                    let (x2, y2) = (step(x, px, nx), step(y, py, ny));
-                    let m = get(x2, Some(y)).min(get(Some(x), y2)).min(get(x2, y2));
-                    self.quad[4 * i + q] = (m + 1).min(255) as u8;
                 }
             }
+            self.planes[q] = plane;
         }
     }
 
@@ -534,104 +538,232 @@ impl World {
 
     /// Ray cast with a unit direction vector.
     pub(crate) fn raycast_dir(&self, o: [f64; 2], d: [f64; 2], max_range_m: f64) -> Option<f64> {
-        if !(o[0].is_finite() && o[1].is_finite() && max_range_m.is_finite() && max_range_m >= 0.0)
-        {
-            return None;
+        let mut ray = Ray::default();
+        if let Some(r) = self.ray_start(o, d, max_range_m, &mut ray) {
+            return r;
         }
-        // Work in cell units: cell coordinate = oc + t * dc.
-        let (irx, iry) = (1.0 / self.rx, 1.0 / self.ry);
-        let oc = [(o[0] - self.x0) * irx, (o[1] - self.y0) * iry];
-        let dc = [d[0] * irx, d[1] * iry];
-        let idc = [1.0 / dc[0], 1.0 / dc[1]];
-        let (nx, ny) = (self.nx as i64, self.ny as i64);
-        // Clip against the grid box [0, nx] x [0, ny].
-        let (mut t0, mut t1) = (0.0f64, max_range_m);
-        for (oo, ii, hi) in [(oc[0], idc[0], nx as f64), (oc[1], idc[1], ny as f64)] {
-            if ii.is_infinite() {
+        loop {
+            if let Some(r) = self.ray_step(&mut ray) {
+                return r;
+            }
+        }
+    }
+
+    /// The ray origin `o` seen from each quadrant of travel, for rays cast from it.
+    fn eye(&self, o: [f64; 2]) -> Eye {
+        let gx = (o[0] - self.x0) * self.irx;
+        let gy = (o[1] - self.y0) * self.iry;
+        let (nx, ny) = (self.nx as f64, self.ny as f64);
+        let mut eye = Eye {
+            inside: gx >= 0.0 && gy >= 0.0 && gx < nx && gy < ny,
+            o,
+            ..Eye::default()
+        };
+        if eye.inside {
+            for q in 0..4 {
+                let ox = if q & 1 == 1 { gx } else { nx - gx };
+                let oy = if q & 2 == 2 { gy } else { ny - gy };
+                eye.g[q] = [ox, oy];
+                eye.c[q] = [
+                    (ox as i32).clamp(0, self.nx as i32 - 1),
+                    (oy as i32).clamp(0, self.ny as i32 - 1),
+                ];
+            }
+        }
+        eye
+    }
+
+    /// [`World::ray_start`] for a ray from `eye`'s origin, quicker when the origin is in the grid.
+    #[inline(always)]
+    fn ray_start_eye(
+        &self,
+        eye: &Eye,
+        d: [f64; 2],
+        max: f64,
+        ray: &mut Ray,
+    ) -> Option<Option<f64>> {
+        if !(eye.inside && d[0].is_finite() && d[1].is_finite() && max >= 0.0 && max.is_finite()) {
+            return self.ray_start(eye.o, d, max, ray);
+        }
+        let q = usize::from(d[0] >= 0.0) | (usize::from(d[1] >= 0.0) << 1);
+        let dx = d[0].abs() * self.irx;
+        let dy = d[1].abs() * self.iry;
+        *ray = Ray {
+            ox: eye.g[q][0],
+            oy: eye.g[q][1],
+            dx,
+            dy,
+            ix: 1.0 / dx,
+            iy: 1.0 / dy,
+            t1: max,
+            max,
+            t: 0.0,
+            best: f64::INFINITY,
+            cx: eye.c[q][0],
+            cy: eye.c[q][1],
+            q,
+            o: eye.o,
+            d,
+        };
+        None
+    }
+
+    /// Sets up a ray for [`World::ray_step`], or answers at once.
+    fn ray_start(&self, o: [f64; 2], d: [f64; 2], max: f64, ray: &mut Ray) -> Option<Option<f64>> {
+        if !(o[0].is_finite()
+            && o[1].is_finite()
+            && d[0].is_finite()
+            && d[1].is_finite()
+            && max.is_finite()
+            && max >= 0.0)
+        {
+            return Some(None);
+        }
+        // A zero component counts as positive: the ray then stays in the cell at or after it.
+        let (sx, sy) = (d[0] >= 0.0, d[1] >= 0.0);
+        let (nx, ny) = (self.nx as f64, self.ny as f64);
+        // Mirrored cell coordinates in which the ray moves toward +x and +y.
+        let gx = (o[0] - self.x0) * self.irx;
+        let gy = (o[1] - self.y0) * self.iry;
+        let ox = if sx { gx } else { nx - gx };
+        let oy = if sy { gy } else { ny - gy };
+        let dx = d[0].abs() * self.irx;
+        let dy = d[1].abs() * self.iry;
+        let (ix, iy) = (1.0 / dx, 1.0 / dy);
+        let (mut t0, mut t1) = (0.0f64, max);
+        for (oo, dd, ii, hi) in [(ox, dx, ix, nx), (oy, dy, iy, ny)] {
+            if dd == 0.0 {
                 if oo < 0.0 || oo >= hi {
-                    return None;
+                    return Some(None);
                 }
             } else {
-                let (a, b) = (-oo * ii, (hi - oo) * ii);
-                t0 = t0.max(a.min(b));
-                t1 = t1.min(a.max(b));
+                t0 = t0.max(-oo * ii);
+                t1 = t1.min((hi - oo) * ii);
             }
         }
         if t0 > t1 {
-            return None;
+            return Some(None);
         }
-        let mut t = t0;
-        let mut best = f64::INFINITY;
-        let (sx, sy) = (d[0] > 0.0, d[1] > 0.0);
-        let quadrant = usize::from(sx) | (usize::from(sy) << 1);
-        // The cell holding coordinate f on a ray moving with slope `dcs`: on a cell border, the
-        // cell ahead.
-        // Coordinates within rounding of the grid's edge are clamped into it (the ray enters the
-        // grid exactly on its edge).
-        let cell = |f: f64, dcs: f64, n: i64| {
-            // Truncation with a correction: `floor`/`ceil` are library calls on baseline x86-64.
-            let i = f as i64;
-            let c = if dcs < 0.0 {
-                // ceil(f) - 1
-                if (i as f64) < f { i } else { i - 1 }
-            } else if (i as f64) > f {
-                i - 1
-            } else {
-                i
-            };
-            if (c < 0 && f > -1e-7) || (c >= n && f < n as f64 + 1e-7) {
-                c.clamp(0, n - 1)
-            } else {
-                c
-            }
+        *ray = Ray {
+            ox,
+            oy,
+            dx,
+            dy,
+            ix,
+            iy,
+            t1,
+            max,
+            t: t0,
+            best: f64::INFINITY,
+            cx: ((ox + t0 * dx) as i32).clamp(0, self.nx as i32 - 1),
+            cy: ((oy + t0 * dy) as i32).clamp(0, self.ny as i32 - 1),
+            q: usize::from(sx) | (usize::from(sy) << 1),
+            o,
+            d,
         };
-        loop {
-            let cx = cell(oc[0] + t * dc[0], dc[0], nx);
-            let cy = cell(oc[1] + t * dc[1], dc[1], ny);
-            if cx < 0 || cy < 0 || cx >= nx || cy >= ny {
-                break;
-            }
-            let idx = cy as usize * self.nx + cx as usize;
-            let k = self.quad[4 * idx + quadrant];
-            let k = if k == 0 {
-                if self.cells[idx] == SOLID {
-                    return (t <= max_range_m).then_some(t);
-                }
-                1
-            } else {
-                k as i64
-            };
-            // Exit of the empty square of k x k cells from this cell toward the ray's quadrant.
-            let bx = if sx { cx + k } else { cx - k + 1 } as f64;
-            let by = if sy { cy + k } else { cy - k + 1 } as f64;
-            let ex = if dc[0] != 0.0 {
-                (bx - oc[0]) * idc[0]
-            } else {
-                f64::INFINITY
-            };
-            let ey = if dc[1] != 0.0 {
-                (by - oc[1]) * idc[1]
-            } else {
-                f64::INFINITY
-            };
-            let exit = ex.min(ey);
-            if self.quad[4 * idx + quadrant] == 0 {
-                for &p in self.list(self.cells[idx]) {
-                    if let Some(th) = ray_prim(o, d, &self.prims[p as usize]) {
-                        best = best.min(th);
-                    }
-                }
-                if best <= exit {
-                    return (best <= max_range_m).then_some(best);
-                }
-            }
-            if exit > t1 {
-                break;
-            }
-            // Always progress, even when rounding puts the exit at or before t.
-            t = exit.max(t + 1e-12 + t * 1e-15);
+        None
+    }
+
+    /// Advances a ray by one empty square (or one cell holding shapes); the answer once it is known.
+    #[inline(always)]
+    fn ray_step(&self, r: &mut Ray) -> Option<Option<f64>> {
+        let (cx, cy) = (r.cx, r.cy);
+        let k = self.planes[r.q][cy as usize * self.nx + cx as usize];
+        if k == 0 {
+            return Some((r.t <= r.max).then_some(r.t));
         }
-        (best <= max_range_m).then_some(best)
+        let kk = if k == LIST { 1 } else { i32::from(k) };
+        let ex = ((cx + kk) as f64 - r.ox) * r.ix;
+        let ey = ((cy + kk) as f64 - r.oy) * r.iy;
+        let e = if ex < ey { ex } else { ey };
+        if k == LIST && self.test_list(r, e) {
+            return Some((r.best <= r.max).then_some(r.best));
+        }
+        if e > r.t1 {
+            return Some((r.best <= r.max).then_some(r.best));
+        }
+        // The cell the ray enters: across the exit side(s), and within the square on the other axis.
+        let fx = ((r.ox + e * r.dx) as i32).max(cx).min(cx + kk - 1);
+        let fy = ((r.oy + e * r.dy) as i32).max(cy).min(cy + kk - 1);
+        let ncx = if ex <= ey { cx + kk } else { fx };
+        let ncy = if ey <= ex { cy + kk } else { fy };
+        if ncx >= self.nx as i32 || ncy >= self.ny as i32 {
+            return Some((r.best <= r.max).then_some(r.best));
+        }
+        r.cx = ncx;
+        r.cy = ncy;
+        r.t = e;
+        None
+    }
+
+    /// Tests the shapes of the ray's current cell; true when the nearest hit lies before `exit`.
+    #[inline(never)]
+    fn test_list(&self, r: &mut Ray, exit: f64) -> bool {
+        let ax = if r.q & 1 == 1 {
+            r.cx
+        } else {
+            self.nx as i32 - 1 - r.cx
+        };
+        let ay = if r.q & 2 == 2 {
+            r.cy
+        } else {
+            self.ny as i32 - 1 - r.cy
+        };
+        for &p in self.list(self.cells[ay as usize * self.nx + ax as usize]) {
+            if let Some(th) = ray_prim(r.o, r.d, &self.prims[p as usize]) {
+                r.best = r.best.min(th);
+            }
+        }
+        r.best <= exit
+    }
+
+    /// Casts rays from `o` along `dir(0)`, `dir(1)`, ... (called in order), several at once;
+    /// `out[i]` is ray i's hit distance, or infinity for none within `max`.
+    pub(crate) fn raycast_many(
+        &self,
+        o: [f64; 2],
+        mut dir: impl FnMut(usize) -> [f64; 2],
+        max: f64,
+        out: &mut [f64],
+    ) {
+        const LANES: usize = 4;
+        const IDLE: usize = usize::MAX;
+        let n = out.len();
+        let eye = self.eye(o);
+        let mut next = 0;
+        let mut rays = [Ray::default(); LANES];
+        let mut ids = [IDLE; LANES];
+        // Starts the next ray that needs stepping in `ray`, answering the others at once.
+        let mut refill = |next: &mut usize, out: &mut [f64], ray: &mut Ray| -> usize {
+            while *next < n {
+                let i = *next;
+                *next += 1;
+                match self.ray_start_eye(&eye, dir(i), max, ray) {
+                    None => return i,
+                    Some(r) => out[i] = r.unwrap_or(f64::INFINITY),
+                }
+            }
+            IDLE
+        };
+        for (id, ray) in ids.iter_mut().zip(rays.iter_mut()) {
+            *id = refill(&mut next, out, ray);
+        }
+        loop {
+            let mut active = false;
+            for (id, ray) in ids.iter_mut().zip(rays.iter_mut()) {
+                if *id == IDLE {
+                    continue;
+                }
+                active = true;
+                if let Some(res) = self.ray_step(ray) {
+                    out[*id] = res.unwrap_or(f64::INFINITY);
+                    *id = refill(&mut next, out, ray);
+                }
+            }
+            if !active {
+                break;
+            }
+        }
     }
 
     /// Distance from `p` to the nearest obstacle, or `search_m` if none lies closer.
@@ -769,6 +901,52 @@ impl World {
         }
         false
     }
+}
+
+/// A ray in flight, in the mirrored cell coordinates of its quadrant `q` (bit 0: moving toward
+/// +x, bit 1: toward +y): an axis along which the ray moves toward -x (or -y) is flipped,
+/// `m = n - g` for cell coordinate `g` on a grid of `n` cells, so the ray always moves toward +m.
+/// The point at distance `t` (metres) is `(ox + t dx, oy + t dy)`.
+#[derive(Debug, Clone, Copy, Default)]
+struct Ray {
+    /// Origin, mirrored cell coordinates.
+    ox: f64,
+    oy: f64,
+    /// Direction per metre, cells (>= 0).
+    dx: f64,
+    dy: f64,
+    /// 1 / dx and 1 / dy (may be infinite).
+    ix: f64,
+    iy: f64,
+    /// Where the ray stops: the maximum range, or where it leaves the grid.
+    t1: f64,
+    /// The maximum range.
+    max: f64,
+    /// Where the ray entered the current cell.
+    t: f64,
+    /// The nearest shape hit so far.
+    best: f64,
+    /// The current cell, mirrored.
+    cx: i32,
+    cy: i32,
+    /// The quadrant: which plane to read.
+    q: usize,
+    /// Origin and unit direction, world coordinates (for exact shape tests).
+    o: [f64; 2],
+    d: [f64; 2],
+}
+
+/// A ray origin seen from each quadrant of travel (`q` as in [`Ray`]).
+#[derive(Debug, Clone, Copy, Default)]
+struct Eye {
+    /// True when the origin lies inside the grid.
+    inside: bool,
+    /// The origin, world coordinates.
+    o: [f64; 2],
+    /// The origin in each quadrant's mirrored cell coordinates.
+    g: [[f64; 2]; 4],
+    /// Its cell there.
+    c: [[i32; 2]; 4],
 }
 
 fn cross(a: [f64; 2], b: [f64; 2]) -> f64 {
