@@ -1,7 +1,8 @@
 //! One whole cycle of the goal-seeking loop (docs/method.md, "One cycle") on 685-ray scans of
 //! the paper's world, with the crates' public APIs called as `robot_app::navigator` calls them:
 //! expand, plan, measure the rotation, detect and select a landmark, triangle OBC, one tracking
-//! step, map update (occupancy grid and planner memory). Goal: at most 0.5 ms per cycle.
+//! step, one scan match (the goalseek travel rule), map update (occupancy grid and planner
+//! memory). Goal: at most 0.5 ms per cycle. `cycle_step/*` times each step alone.
 //!
 //! `cycle` alternates between two poses of the first leg (start and near B), so every cycle
 //! updates the maps; `cycle_new_field` also alternates the target, which forces the planner to
@@ -19,7 +20,7 @@ use expansion::Expander;
 use landmarks::{DetectParams, SelectParams, TrackParams, Tracker, detect, select};
 use localiser::OccupancyGrid;
 use planner::{Plan, Planner};
-use robot_app::config::{Config, Method};
+use robot_app::config::{Config, Method, TravelRuleCfg};
 use scan_types::{LaserSource, Pose2, Scan, ScanGeometry, WorldPoint};
 use sim_laser::{MotionNoise, SensorPreset, Simulation, World};
 
@@ -148,6 +149,16 @@ impl Cycle {
                 _ => 0.0,
             };
         }
+        // Scan-matched travel (goalseek's default travel rule): the reference scan and one
+        // alignment, as each keyframe of a drive does.
+        if self.cfg.localiser.travel_rule == TravelRuleCfg::ScanMatched {
+            let params = localiser::MatchParams::default();
+            let mut reference = localiser::MatchTarget::from_scan(g, &s.after, &params);
+            let guess = Pose2::new(0.05, 0.0, 0.0);
+            if let Some(m) = reference.align(g, &s.stepped, guess, &params) {
+                out += m.pose.x_m;
+            }
+        }
         // Map with the localised scan.
         self.grid.integrate(&s.pose, g, &s.stepped);
         self.planner.add_scan(&s.pose, g, &s.stepped);
@@ -188,6 +199,62 @@ fn bench_cycle(c: &mut Criterion) {
         })
     });
     group.finish();
+
+    // Each step alone, to see where a cycle's time goes.
+    let mut steps = c.benchmark_group("cycle_step");
+    let mut cy = Cycle::new(g);
+    for _ in 0..4 {
+        cy.run(&stops[0], target);
+        cy.run(&stops[1], target);
+    }
+    let s = &stops[0];
+    let r = cy.cfg.robot.radius_m + cy.cfg.robot.expansion_margin_m;
+    steps.bench_function("expand", |b| {
+        b.iter(|| {
+            cy.expander
+                .clearances(black_box(&s.before), r, &mut cy.clearances)
+        })
+    });
+    steps.bench_function("plan", |b| {
+        b.iter(|| {
+            black_box(
+                cy.planner
+                    .plan(&s.pose, &g, &s.before, &cy.clearances, target),
+            )
+        })
+    });
+    steps.bench_function("measure_rotation", |b| {
+        b.iter(|| {
+            black_box(localiser::measure_rotation(
+                &g,
+                &s.before,
+                &s.after,
+                TURN_RAD,
+                cy.cfg.localiser.rotation_search_deg.to_radians(),
+            ))
+        })
+    });
+    steps.bench_function("detect_select", |b| {
+        b.iter(|| black_box(select(&detect(&g, &s.after, &cy.detect), &cy.select)))
+    });
+    let lm = select(&detect(&g, &s.after, &cy.detect), &cy.select).expect("a landmark");
+    steps.bench_function("track_step", |b| {
+        b.iter(|| black_box(Tracker::new(lm, cy.track).update(&g, &s.stepped, 0.05)))
+    });
+    let mp = localiser::MatchParams::default();
+    steps.bench_function("scan_match", |b| {
+        b.iter(|| {
+            let mut reference = localiser::MatchTarget::from_scan(&g, &s.after, &mp);
+            black_box(reference.align(&g, &s.stepped, Pose2::new(0.05, 0.0, 0.0), &mp))
+        })
+    });
+    steps.bench_function("grid_integrate", |b| {
+        b.iter(|| black_box(cy.grid.integrate(&s.pose, &g, &s.stepped)))
+    });
+    steps.bench_function("planner_add_scan", |b| {
+        b.iter(|| cy.planner.add_scan(&s.pose, &g, black_box(&s.stepped)))
+    });
+    steps.finish();
 }
 
 criterion_group!(benches, bench_cycle);
