@@ -27,10 +27,12 @@ pub struct MatchParams {
     pub min_pairs: usize,
     /// Largest RMS point-to-line residual of the matched points, metres.
     pub max_rms_m: f64,
-    /// Two hits within this of each other (and at most `normal_rays` rays apart) lie on one
-    /// surface for the normal fit, metres.
+    /// Neighbouring hits within this of each other lie on one surface, metres.
     pub surface_m: f64,
-    /// Rays on each side used to fit a hit's surface normal.
+    /// A hit's surface line is fitted over the hits of its surface within this distance of
+    /// it on each side, metres.
+    pub normal_half_length_m: f64,
+    /// At most this many rays on each side enter the fit.
     pub normal_rays: usize,
     /// Matched normals must agree within this angle, radians (front and back of a thin wall).
     pub max_normal_angle_rad: f64,
@@ -38,8 +40,8 @@ pub struct MatchParams {
 
 impl Default for MatchParams {
     /// 40 iterations, gate 0.3 m shrinking by 0.7 to 0.06 m, 2 cm Cauchy scale and point
-    /// sigma, prior 0.1 m / 2 deg, 40 pairs, RMS at most 3 cm, normals from +-3 rays within
-    /// 0.15 m, normals within 60 deg.
+    /// sigma, prior 0.1 m / 2 deg, 40 pairs, RMS at most 3 cm, each hit's surface line fitted
+    /// over +-0.1 m (at most 30 rays a side, neighbours within 0.15 m), normals within 60 deg.
     fn default() -> Self {
         Self {
             max_iterations: 40,
@@ -53,7 +55,8 @@ impl Default for MatchParams {
             min_pairs: 40,
             max_rms_m: 0.03,
             surface_m: 0.15,
-            normal_rays: 3,
+            normal_half_length_m: 0.1,
+            normal_rays: 30,
             max_normal_angle_rad: 60f64.to_radians(),
         }
     }
@@ -423,7 +426,9 @@ fn oriented_hits(geometry: &ScanGeometry, scan: &Scan, params: &MatchParams) -> 
                 }
                 let Some(q) = pts[j as usize] else { break };
                 let q = (q.x_m(), q.y_m());
-                if (q.0 - prev.0).hypot(q.1 - prev.1) > params.surface_m {
+                if (q.0 - prev.0).hypot(q.1 - prev.1) > params.surface_m
+                    || (q.0 - px).hypot(q.1 - py) > params.normal_half_length_m
+                {
                     break;
                 }
                 members.push(q);
@@ -458,8 +463,10 @@ fn oriented_hits(geometry: &ScanGeometry, scan: &Scan, params: &MatchParams) -> 
         if nrm[0] * px + nrm[1] * py > 0.0 {
             nrm = [-nrm[0], -nrm[1]];
         }
+        // The point on the fitted line nearest the hit (removes the range noise across it).
+        let off = (px - mx) * nrm[0] + (py - my) * nrm[1];
         out.push(Oriented {
-            p: [px, py],
+            p: [px - off * nrm[0], py - off * nrm[1]],
             n: nrm,
         });
     }

@@ -57,8 +57,10 @@ pub enum PlanRuleCfg {
 pub enum HeadingRuleCfg {
     /// The paper: theta += commanded alpha.
     Commanded,
-    /// goalseek: the shift that best aligns the scans before and after the rotation.
+    /// The shift that best aligns the scans before and after the rotation.
     ScanMeasured,
+    /// goalseek: the shift, refined by matching the two scans' surfaces (point-to-line ICP).
+    ScanMatched,
 }
 
 /// The robot and the obstacle expansion.
@@ -112,6 +114,9 @@ pub struct LandmarkCfg {
     pub range_limit_margin_m: f64,
     /// Also use occlusion edges (range jumps between two hits).
     pub occlusion_edges: bool,
+    /// Also select corners (two straight arms meeting at an angle) as landmarks; the paper
+    /// selects only max-range jumps. Tracking re-identifies every kind either way.
+    pub corners: bool,
     /// Smallest range jump that makes an occlusion edge, metres.
     pub min_jump_m: f64,
     /// Smallest OB (distance to drive to B) for a landmark to be usable, metres.
@@ -209,6 +214,7 @@ impl Config {
                 max_bearing_deg: 90.0,
                 range_limit_margin_m: 0.15,
                 occlusion_edges: false,
+                corners: false,
                 min_jump_m: 0.5,
                 min_ob_m: 0.2,
                 min_cb_m: 0.15,
@@ -219,7 +225,7 @@ impl Config {
                 max_missed_scans: 3,
             },
             localiser: LocaliserCfg {
-                heading_rule: HeadingRuleCfg::ScanMeasured,
+                heading_rule: HeadingRuleCfg::ScanMatched,
                 rotation_search_deg: 6.0,
                 travel_rule: TravelRuleCfg::ScanMatched,
                 keyframe_m: 1.0,
@@ -443,7 +449,7 @@ mod tests {
         assert_eq!(p.planner.rule, PlanRuleCfg::Greedy);
         assert_eq!(g.planner.rule, PlanRuleCfg::MapPath);
         assert_eq!(p.localiser.heading_rule, HeadingRuleCfg::Commanded);
-        assert_eq!(g.localiser.heading_rule, HeadingRuleCfg::ScanMeasured);
+        assert_eq!(g.localiser.heading_rule, HeadingRuleCfg::ScanMatched);
         assert_eq!(p.robot.expansion_margin_m, 0.0);
         assert_eq!(g.robot.expansion_margin_m, 0.1);
         assert_eq!(g.navigator.max_legs, 60);

@@ -124,6 +124,7 @@ impl<'a, L: LaserSource, M: MotionBase + ?Sized> Navigator<'a, L, M> {
         detect_params.range_limit_margin_m = cfg.landmarks.range_limit_margin_m;
         detect_params.reject_near_range_limit = cfg.landmarks.range_limit_margin_m > 0.0;
         detect_params.occlusion_edges = cfg.landmarks.occlusion_edges;
+        detect_params.corners = cfg.landmarks.corners;
         detect_params.occlusion_jump_m = cfg.landmarks.min_jump_m;
         let mut select_params = select_params;
         select_params.max_bearing_rad = cfg.landmarks.max_bearing_deg.to_radians();
@@ -289,9 +290,8 @@ impl<'a, L: LaserSource, M: MotionBase + ?Sized> Navigator<'a, L, M> {
         for _ in 0..chunks {
             self.rotate(chunk)?;
             let after = self.scan()?;
-            let turned = match self.cfg.localiser.heading_rule {
-                HeadingRuleCfg::Commanded => chunk,
-                HeadingRuleCfg::ScanMeasured => localiser::measure_rotation(
+            let measured = || {
+                localiser::measure_rotation(
                     &self.geometry,
                     &before,
                     &after,
@@ -301,12 +301,38 @@ impl<'a, L: LaserSource, M: MotionBase + ?Sized> Navigator<'a, L, M> {
                 .unwrap_or_else(|| {
                     tracing::debug!(chunk, "rotation not measurable; using the command");
                     chunk
-                }),
+                })
+            };
+            let turned = match self.cfg.localiser.heading_rule {
+                HeadingRuleCfg::Commanded => chunk,
+                HeadingRuleCfg::ScanMeasured => measured(),
+                HeadingRuleCfg::ScanMatched => {
+                    let m = measured();
+                    self.rotation_matched(&before, &after, m).unwrap_or(m)
+                }
             };
             self.estimate = self.estimate.rotated(turned);
             before = after;
         }
         Ok(before)
+    }
+
+    /// The rotation in place between `before` and `after` by scan matching, starting from
+    /// `guess_rad`; the position is held near the spot by a tight prior.
+    fn rotation_matched(&self, before: &Scan, after: &Scan, guess_rad: f64) -> Option<f64> {
+        let params = localiser::MatchParams {
+            prior_sigma_m: 0.01,
+            initial_gate_m: 0.15,
+            ..localiser::MatchParams::default()
+        };
+        let mut target = localiser::MatchTarget::from_scan(&self.geometry, before, &params);
+        let m = target.align(
+            &self.geometry,
+            after,
+            Pose2::new(0.0, 0.0, guess_rad),
+            &params,
+        )?;
+        Some(guess_rad + scan_types::angle_diff_rad(m.pose.theta_rad, guess_rad))
     }
 
     /// Clearance straight ahead in `scan` (the ray nearest bearing 0), metres.
@@ -436,6 +462,8 @@ impl<'a, L: LaserSource, M: MotionBase + ?Sized> Navigator<'a, L, M> {
                     ahead_m,
                     dx = m.pose.x_m - ahead_m,
                     dy = m.pose.y_m,
+                    dth_deg = m.pose.theta_rad.to_degrees(),
+                    sig = m.worst_sigma_m,
                     rms = m.rms_m,
                     pairs = m.pairs,
                     "scan match"
