@@ -575,12 +575,12 @@ impl World {
 
     /// [`World::ray_start`] for a ray from `eye`'s origin, quicker when the origin is in the grid.
     #[inline(always)]
-    fn ray_start_eye(
-        &self,
+    fn ray_start_eye<'a>(
+        &'a self,
         eye: &Eye,
         d: [f64; 2],
         max: f64,
-        ray: &mut Ray,
+        ray: &mut Ray<'a>,
     ) -> Option<Option<f64>> {
         if !(eye.inside && d[0].is_finite() && d[1].is_finite() && max >= 0.0 && max.is_finite()) {
             return self.ray_start(eye.o, d, max, ray);
@@ -602,6 +602,7 @@ impl World {
             cx: eye.c[q][0],
             cy: eye.c[q][1],
             q,
+            plane: &self.planes[q],
             o: eye.o,
             d,
         };
@@ -609,7 +610,13 @@ impl World {
     }
 
     /// Sets up a ray for [`World::ray_step`], or answers at once.
-    fn ray_start(&self, o: [f64; 2], d: [f64; 2], max: f64, ray: &mut Ray) -> Option<Option<f64>> {
+    fn ray_start<'a>(
+        &'a self,
+        o: [f64; 2],
+        d: [f64; 2],
+        max: f64,
+        ray: &mut Ray<'a>,
+    ) -> Option<Option<f64>> {
         if !(o[0].is_finite()
             && o[1].is_finite()
             && d[0].is_finite()
@@ -658,6 +665,7 @@ impl World {
             cx: ((ox + t0 * dx) as i32).clamp(0, self.nx as i32 - 1),
             cy: ((oy + t0 * dy) as i32).clamp(0, self.ny as i32 - 1),
             q: usize::from(sx) | (usize::from(sy) << 1),
+            plane: &self.planes[usize::from(sx) | (usize::from(sy) << 1)],
             o,
             d,
         };
@@ -668,7 +676,7 @@ impl World {
     #[inline(always)]
     fn ray_step(&self, r: &mut Ray) -> Option<Option<f64>> {
         let (cx, cy) = (r.cx, r.cy);
-        let k = self.planes[r.q][cy as usize * self.nx + cx as usize];
+        let k = r.plane[cy as usize * self.nx + cx as usize];
         if k == 0 {
             return Some((r.t <= r.max).then_some(r.t));
         }
@@ -719,8 +727,8 @@ impl World {
 
     /// Casts rays from `o` along `dir(0)`, `dir(1)`, ... (called in order), several at once;
     /// `out[i]` is ray i's hit distance, or infinity for none within `max`.
-    pub(crate) fn raycast_many(
-        &self,
+    pub(crate) fn raycast_many<'a>(
+        &'a self,
         o: [f64; 2],
         mut dir: impl FnMut(usize) -> [f64; 2],
         max: f64,
@@ -734,7 +742,7 @@ impl World {
         let mut rays = [Ray::default(); LANES];
         let mut ids = [IDLE; LANES];
         // Starts the next ray that needs stepping in `ray`, answering the others at once.
-        let mut refill = |next: &mut usize, out: &mut [f64], ray: &mut Ray| -> usize {
+        let mut refill = |next: &mut usize, out: &mut [f64], ray: &mut Ray<'a>| -> usize {
             while *next < n {
                 let i = *next;
                 *next += 1;
@@ -908,7 +916,7 @@ impl World {
 /// `m = n - g` for cell coordinate `g` on a grid of `n` cells, so the ray always moves toward +m.
 /// The point at distance `t` (metres) is `(ox + t dx, oy + t dy)`.
 #[derive(Debug, Clone, Copy, Default)]
-struct Ray {
+struct Ray<'a> {
     /// Origin, mirrored cell coordinates.
     ox: f64,
     oy: f64,
@@ -929,8 +937,10 @@ struct Ray {
     /// The current cell, mirrored.
     cx: i32,
     cy: i32,
-    /// The quadrant: which plane to read.
+    /// The quadrant.
     q: usize,
+    /// Its plane.
+    plane: &'a [u8],
     /// Origin and unit direction, world coordinates (for exact shape tests).
     o: [f64; 2],
     d: [f64; 2],
