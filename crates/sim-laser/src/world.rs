@@ -311,6 +311,7 @@ impl World {
         // Per-cell primitive lists, gathered as (cell, prim) pairs.
         let mut pairs: Vec<(u32, u32)> = Vec::new();
         let mut interiors: Vec<usize> = Vec::new();
+        let mut inside_discs: Vec<usize> = Vec::new();
         for o in &parts.obstacles {
             match o {
                 Obstacle::Circle { centre, radius } => {
@@ -319,7 +320,7 @@ impl World {
                         c: *centre,
                         r: *radius,
                     });
-                    w.bucket(o.aabb(), id, &mut pairs);
+                    w.bucket_circle(*centre, *radius, id, &mut pairs, &mut inside_discs);
                 }
                 Obstacle::Segment { a, b } => {
                     let id = w.prims.len() as u32;
@@ -328,7 +329,7 @@ impl World {
                         b: *b,
                         poly: NO_POLY,
                     });
-                    w.bucket(o.aabb(), id, &mut pairs);
+                    w.bucket_segment(*a, *b, id, &mut pairs);
                 }
                 _ => {
                     let pts = o.polygon_points().unwrap_or_default();
@@ -337,7 +338,7 @@ impl World {
                         let (a, b) = (pts[i], pts[(i + 1) % pts.len()]);
                         let id = w.prims.len() as u32;
                         w.prims.push(Prim::Segment { a, b, poly });
-                        w.bucket(aabb_of(&[a, b]), id, &mut pairs);
+                        w.bucket_segment(a, b, id, &mut pairs);
                     }
                     interiors.push(w.polygons.len());
                     w.polygons.push(pts);
@@ -358,6 +359,10 @@ impl World {
             }
             w.list_start.push(w.list_items.len() as u32);
             w.cells[cell as usize] = list + 2;
+        }
+        // Cells entirely inside a disc are solid.
+        for idx in inside_discs {
+            w.cells[idx] = SOLID;
         }
         // Polygon interiors: cells without an edge of the polygon whose centre is inside.
         for &p in &interiors {
@@ -400,14 +405,53 @@ impl World {
         Ok(w)
     }
 
-    fn bucket(&self, (l, h): ([f64; 2], [f64; 2]), id: u32, pairs: &mut Vec<(u32, u32)>) {
-        // Widen a little so that geometry lying exactly on a cell border is in both cells.
-        let e = 1e-9;
+    /// The cells of the grid overlapping the box `l`..`h` widened by `e`, with their corners.
+    fn cells_in(
+        &self,
+        l: [f64; 2],
+        h: [f64; 2],
+        e: f64,
+    ) -> impl Iterator<Item = (usize, [f64; 2], [f64; 2])> + '_ {
         let (cx0, cy0) = self.cell_of(l[0] - e, l[1] - e);
         let (cx1, cy1) = self.cell_of(h[0] + e, h[1] + e);
-        for cy in cy0.max(0)..=cy1.min(self.ny as i64 - 1) {
-            for cx in cx0.max(0)..=cx1.min(self.nx as i64 - 1) {
-                pairs.push(((cy as usize * self.nx + cx as usize) as u32, id));
+        (cy0.max(0)..=cy1.min(self.ny as i64 - 1)).flat_map(move |cy| {
+            (cx0.max(0)..=cx1.min(self.nx as i64 - 1)).map(move |cx| {
+                let lo = [self.x0 + cx as f64 * self.rx, self.y0 + cy as f64 * self.ry];
+                let hi = [lo[0] + self.rx, lo[1] + self.ry];
+                (cy as usize * self.nx + cx as usize, lo, hi)
+            })
+        })
+    }
+
+    /// Lists segment `id` in every cell it touches.
+    fn bucket_segment(&self, a: [f64; 2], b: [f64; 2], id: u32, pairs: &mut Vec<(u32, u32)>) {
+        // Widen a little so that geometry lying exactly on a cell border is in both cells.
+        let e = 1e-9;
+        let (l, h) = aabb_of(&[a, b]);
+        for (idx, lo, hi) in self.cells_in(l, h, e) {
+            if segment_hits_box(a, b, [lo[0] - e, lo[1] - e], [hi[0] + e, hi[1] + e]) {
+                pairs.push((idx as u32, id));
+            }
+        }
+    }
+
+    /// Lists circle `id` in every cell its boundary touches; notes the cells entirely inside.
+    fn bucket_circle(
+        &self,
+        c: [f64; 2],
+        r: f64,
+        id: u32,
+        pairs: &mut Vec<(u32, u32)>,
+        inside: &mut Vec<usize>,
+    ) {
+        let e = 1e-9;
+        for (idx, lo, hi) in self.cells_in([c[0] - r, c[1] - r], [c[0] + r, c[1] + r], e) {
+            let near = |k: usize| (lo[k] - c[k]).max(c[k] - hi[k]).max(0.0);
+            let far = |k: usize| (c[k] - lo[k]).abs().max((hi[k] - c[k]).abs());
+            if far(0).hypot(far(1)) < r - e {
+                inside.push(idx);
+            } else if near(0).hypot(near(1)) <= r + e {
+                pairs.push((idx as u32, id));
             }
         }
     }
@@ -690,7 +734,8 @@ impl World {
         if e > r.t1 {
             return Some((r.best <= r.max).then_some(r.best));
         }
-        // The cell the ray enters: across the exit side(s), and within the square on the other axis.
+        // The cell the ray enters: across the exit side(s), and on the other axis the cell holding
+        // the exit point, clamped to the square's span so rounding can never skip a cell.
         let fx = ((r.ox + e * r.dx) as i32).max(cx).min(cx + kk - 1);
         let fy = ((r.oy + e * r.dy) as i32).max(cy).min(cy + kk - 1);
         let ncx = if ex <= ey { cx + kk } else { fx };
@@ -727,6 +772,8 @@ impl World {
 
     /// Casts rays from `o` along `dir(0)`, `dir(1)`, ... (called in order), several at once;
     /// `out[i]` is ray i's hit distance, or infinity for none within `max`.
+    /// Each ray gives the same answer as [`World::raycast_dir`]; stepping four rays in turn lets
+    /// the processor overlap their memory reads and arithmetic.
     pub(crate) fn raycast_many<'a>(
         &'a self,
         o: [f64; 2],

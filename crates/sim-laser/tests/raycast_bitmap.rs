@@ -147,3 +147,105 @@ fn whole_scans_equal_single_rays() {
         }
     }
 }
+
+fn ray_segment(o: [f64; 2], d: [f64; 2], a: [f64; 2], b: [f64; 2]) -> Option<f64> {
+    // o + t d = a + s (b - a), by Cramer's rule.
+    let e = [b[0] - a[0], b[1] - a[1]];
+    let det = e[0] * d[1] - d[0] * e[1];
+    if det.abs() < 1e-15 {
+        return None;
+    }
+    let r = [a[0] - o[0], a[1] - o[1]];
+    let t = (e[0] * r[1] - r[0] * e[1]) / det;
+    let s = (d[0] * r[1] - d[1] * r[0]) / det;
+    (t >= 0.0 && (0.0..=1.0).contains(&s)).then_some(t)
+}
+
+fn point_segment(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
+    let e = [b[0] - a[0], b[1] - a[1]];
+    let l2 = e[0] * e[0] + e[1] * e[1];
+    let s = (((p[0] - a[0]) * e[0] + (p[1] - a[1]) * e[1]) / l2).clamp(0.0, 1.0);
+    (p[0] - a[0] - s * e[0]).hypot(p[1] - a[1] - s * e[1])
+}
+
+/// Oblique walls and discs (whose cells the grid lists only where the shape passes, and whose
+/// inner cells are solid): rays and clearances against brute force over every shape.
+#[test]
+fn oblique_walls_and_discs_match_brute_force() {
+    let mut rng = ChaCha8Rng::seed_from_u64(3);
+    let mut walls = Vec::new();
+    let mut discs = Vec::new();
+    for _ in 0..25 {
+        let a = [rng.random_range(-4.0..4.0), rng.random_range(-4.0..4.0)];
+        walls.push((
+            a,
+            [
+                a[0] + rng.random_range(-2.0..2.0),
+                a[1] + rng.random_range(-2.0..2.0),
+            ],
+        ));
+        let c = [rng.random_range(-4.0..4.0), rng.random_range(-4.0..4.0)];
+        discs.push((c, rng.random_range(0.05..0.8)));
+    }
+    let obstacles = walls
+        .iter()
+        .map(|&(a, b)| Obstacle::Segment { a, b })
+        .chain(
+            discs
+                .iter()
+                .map(|&(centre, radius)| Obstacle::Circle { centre, radius }),
+        )
+        .collect();
+    let world = World::from_parts(WorldParts {
+        name: "oblique".into(),
+        obstacles,
+        cell_size_m: Some(0.05),
+        ..Default::default()
+    })
+    .unwrap();
+    let mut checked = 0;
+    for _ in 0..1500 {
+        let o = [rng.random_range(-5.0..5.0), rng.random_range(-5.0..5.0)];
+        // Clearance: distance to the nearest shape (0 inside a disc), capped at 1 m.
+        let mut near = 1.0f64;
+        for &(a, b) in &walls {
+            near = near.min(point_segment(o, a, b));
+        }
+        for &(c, r) in &discs {
+            near = near.min(((o[0] - c[0]).hypot(o[1] - c[1]) - r).max(0.0));
+        }
+        let got = world.clearance(WorldPoint::new(o[0], o[1]), 1.0);
+        assert!(
+            (got - near).abs() < 1e-9,
+            "clearance at {o:?}: {got} vs {near}"
+        );
+        if near == 0.0 {
+            continue;
+        }
+        let ang: f64 = rng.random_range(-3.2..3.2);
+        let d = [ang.cos(), ang.sin()];
+        let max = rng.random_range(0.5..10.0);
+        let mut best = f64::INFINITY;
+        for &(a, b) in &walls {
+            if let Some(t) = ray_segment(o, d, a, b) {
+                best = best.min(t);
+            }
+        }
+        for &(c, r) in &discs {
+            let b = d[0] * (o[0] - c[0]) + d[1] * (o[1] - c[1]);
+            let k = (o[0] - c[0]).powi(2) + (o[1] - c[1]).powi(2) - r * r;
+            if b * b - k >= 0.0 && -b - (b * b - k).sqrt() >= 0.0 {
+                best = best.min(-b - (b * b - k).sqrt());
+            }
+        }
+        let want = (best <= max).then_some(best);
+        let got = world.raycast(WorldPoint::new(o[0], o[1]), ang, max);
+        match (want, got) {
+            (Some(w), Some(g)) => assert!((w - g).abs() < 1e-9, "{o:?} {ang}: {w} vs {g}"),
+            (None, None) => {}
+            (w, g) => panic!("o={o:?} ang={ang} max={max}: want {w:?} got {g:?}"),
+        }
+        checked += 1;
+    }
+    assert!(checked > 1000, "{checked}");
+}
