@@ -258,58 +258,75 @@ pub fn cast_scan<R: Rng + ?Sized>(
         world.raycast_many(o, dir, max, &mut ranges_m);
     }
     let mut status = Vec::with_capacity(n);
-    for (i, range) in ranges_m.iter_mut().enumerate() {
-        let hit = if angular {
-            let a =
-                pose.theta_rad + geometry.bearing_rad(i) + noise.angular_sigma_rad * normal(rng);
-            let (s, c) = a.sin_cos();
-            world.raycast_dir(o, [c, s], max).unwrap_or(f64::INFINITY)
-        } else {
-            *range
-        };
-        let (mut r, mut st) = if hit < max {
-            (hit, RayStatus::Hit)
-        } else {
-            (max, RayStatus::MaxRange)
-        };
-        if st == RayStatus::Hit {
-            if r < geometry.min_range_m {
-                st = RayStatus::Error(TOO_NEAR_CODE);
-                r = f64::NAN;
+    if noise.is_off() {
+        // What the loop below does without noise, minus its branches.
+        let min = geometry.min_range_m;
+        for range in ranges_m.iter_mut() {
+            let (r, st) = if *range >= max {
+                (max, RayStatus::MaxRange)
+            } else if *range < min {
+                (f64::NAN, RayStatus::Error(TOO_NEAR_CODE))
             } else {
-                let e = match noise.combine {
-                    SigmaCombine::Max => {
-                        let sigma = noise.range_sigma_m.max(noise.range_sigma_prop * r);
-                        if sigma > 0.0 {
-                            sigma * normal(rng)
-                        } else {
-                            0.0
+                (*range, RayStatus::Hit)
+            };
+            *range = r;
+            status.push(st);
+        }
+    } else {
+        for (i, range) in ranges_m.iter_mut().enumerate() {
+            let hit = if angular {
+                let a = pose.theta_rad
+                    + geometry.bearing_rad(i)
+                    + noise.angular_sigma_rad * normal(rng);
+                let (s, c) = a.sin_cos();
+                world.raycast_dir(o, [c, s], max).unwrap_or(f64::INFINITY)
+            } else {
+                *range
+            };
+            let (mut r, mut st) = if hit < max {
+                (hit, RayStatus::Hit)
+            } else {
+                (max, RayStatus::MaxRange)
+            };
+            if st == RayStatus::Hit {
+                if r < geometry.min_range_m {
+                    st = RayStatus::Error(TOO_NEAR_CODE);
+                    r = f64::NAN;
+                } else {
+                    let e = match noise.combine {
+                        SigmaCombine::Max => {
+                            let sigma = noise.range_sigma_m.max(noise.range_sigma_prop * r);
+                            if sigma > 0.0 {
+                                sigma * normal(rng)
+                            } else {
+                                0.0
+                            }
                         }
+                        SigmaCombine::Sum => {
+                            let mut e = 0.0;
+                            if noise.range_sigma_m > 0.0 {
+                                e += noise.range_sigma_m * normal(rng);
+                            }
+                            if noise.range_sigma_prop > 0.0 {
+                                e += noise.range_sigma_prop * r * normal(rng);
+                            }
+                            e
+                        }
+                    };
+                    r = (r + e).max(geometry.min_range_m);
+                    if r >= max {
+                        r = max;
+                        st = RayStatus::MaxRange;
                     }
-                    SigmaCombine::Sum => {
-                        let mut e = 0.0;
-                        if noise.range_sigma_m > 0.0 {
-                            e += noise.range_sigma_m * normal(rng);
-                        }
-                        if noise.range_sigma_prop > 0.0 {
-                            e += noise.range_sigma_prop * r * normal(rng);
-                        }
-                        e
-                    }
-                };
-                r = (r + e).max(geometry.min_range_m);
-                if r >= max {
-                    r = max;
-                    st = RayStatus::MaxRange;
                 }
             }
+            if noise.dropout_prob > 0.0 && rng.random::<f64>() < noise.dropout_prob {
+                st = RayStatus::Error(DROPOUT_CODE);
+                r = f64::NAN;
+            }
+            *range = r;
+            status.push(st);
         }
-        if noise.dropout_prob > 0.0 && rng.random::<f64>() < noise.dropout_prob {
-            st = RayStatus::Error(DROPOUT_CODE);
-            r = f64::NAN;
-        }
-        *range = r;
-        status.push(st);
     }
     Scan {
         ranges_m,

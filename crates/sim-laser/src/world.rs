@@ -736,10 +736,13 @@ impl World {
         }
         // The cell the ray enters: across the exit side(s), and on the other axis the cell holding
         // the exit point, clamped to the square's span so rounding can never skip a cell.
-        let fx = ((r.ox + e * r.dx) as i32).max(cx).min(cx + kk - 1);
-        let fy = ((r.oy + e * r.dy) as i32).max(cy).min(cy + kk - 1);
-        let ncx = if ex <= ey { cx + kk } else { fx };
-        let ncy = if ey <= ex { cy + kk } else { fy };
+        let (ncx, ncy) = if ex < ey {
+            (cx + kk, ((r.oy + e * r.dy) as i32).max(cy).min(cy + kk - 1))
+        } else if ey < ex {
+            (((r.ox + e * r.dx) as i32).max(cx).min(cx + kk - 1), cy + kk)
+        } else {
+            (cx + kk, cy + kk)
+        };
         if ncx >= self.nx as i32 || ncy >= self.ny as i32 {
             return Some((r.best <= r.max).then_some(r.best));
         }
