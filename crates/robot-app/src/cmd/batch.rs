@@ -173,7 +173,8 @@ pub enum WorldKind {
 
 impl std::fmt::Display for WorldKind {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(match self {
+        // `pad` so that table widths apply.
+        f.pad(match self {
             Self::Paper => "paper",
             Self::Random => "random",
             Self::Corridor => "corridor",
@@ -764,7 +765,10 @@ mod tests {
         assert!((a[0].success_pct - 200.0 / 3.0).abs() < 1e-9);
         assert!((a[0].median_final_error_m - 0.02).abs() < 1e-12);
         assert_eq!(a[0].reasons["leg_limit"], 1);
-        assert!(table(&a).lines().count() == 3);
+        let t = table(&a);
+        assert!(t.lines().count() == 3);
+        // The kind column is padded: "paper" then three spaces before the method.
+        assert!(t.contains("paper    goalseek"), "{t}");
     }
 
     #[test]
