@@ -1,5 +1,6 @@
 //! End to end through the sensor protocol: simulator -> SCIP 2.0 emulator -> urg-driver ->
-//! the goal-seeking loop gives the same legs as the simulator connected directly, same seed.
+//! the goal-seeking loop gives the same legs as the simulator connected directly, same seed,
+//! with the emulator in memory and behind a pseudo-terminal.
 //!
 //! SCIP carries ranges as integer millimetres, clamped to the sensor's [DMIN, DMAX - 1], and
 //! "no return" as code 0. So the direct run reads its scans through [`Millimetres`], which
@@ -144,6 +145,24 @@ fn through_emulator(world: &Arc<World>, seed: u64) -> Run {
     drive(&mut urg, base, &truth)
 }
 
+/// The same, with the emulator behind a pseudo-terminal that the driver opens like a serial port.
+fn through_pty(world: &Arc<World>, seed: u64) -> Run {
+    let (laser, base, truth) = simulation(world, seed).split();
+    let server = urg_driver::serve_pty(Profile::of(Model::Urg04lx), laser).expect("a pty");
+    let mut urg = Urg::open(
+        server.path(),
+        UrgConfig {
+            time_sync_rounds: 0,
+            ..UrgConfig::default()
+        },
+    )
+    .expect("the driver opens the pty");
+    let run = drive(&mut urg, base, &truth);
+    drop(urg);
+    server.stop();
+    run
+}
+
 fn assert_same_legs(a: &Run, b: &Run, what: &str) {
     assert_eq!(a.geometry, b.geometry, "{what}: scan geometry");
     assert_eq!(a.outcome.reason, b.outcome.reason, "{what}: end reason");
@@ -194,6 +213,10 @@ fn emulated_hokuyo_gives_the_same_legs_as_the_direct_simulator() {
         // Something to compare: the runs drove and fixed landmarks.
         assert!(direct_run.outcome.legs >= 2 && fixes >= 1);
         assert_same_legs(&direct_run, &emulated, &format!("seed {seed}"));
+
+        if seed == 0 {
+            assert_same_legs(&direct_run, &through_pty(&world, seed), "pty, seed 0");
+        }
 
         // For the record: whether quantisation alone changes the run.
         let raw = direct(&world, seed, false);
