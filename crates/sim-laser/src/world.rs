@@ -775,7 +775,7 @@ impl World {
 
     /// Casts rays from `o` along `dir(0)`, `dir(1)`, ... (called in order), several at once;
     /// `out[i]` is ray i's hit distance, or infinity for none within `max`.
-    /// Each ray gives the same answer as [`World::raycast_dir`]; stepping four rays in turn lets
+    /// Each ray gives the same answer as [`World::raycast_dir`]; stepping six rays in turn lets
     /// the processor overlap their memory reads and arithmetic.
     pub(crate) fn raycast_many<'a>(
         &'a self,
@@ -784,7 +784,7 @@ impl World {
         max: f64,
         out: &mut [f64],
     ) {
-        const LANES: usize = 4;
+        const LANES: usize = 6;
         const IDLE: usize = usize::MAX;
         let n = out.len();
         let eye = self.eye(o);
