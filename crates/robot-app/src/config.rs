@@ -149,6 +149,11 @@ pub struct LocaliserCfg {
     pub travel_rule: TravelRuleCfg,
     /// While driving, a new reference scan for matching every this many metres.
     pub keyframe_m: f64,
+    /// Standard deviation of a drive's guessed end (landmark or command) at zero distance,
+    /// metres: what scan matching weighs the data against.
+    pub match_prior_m: f64,
+    /// ... growing by this much per metre driven (the base's drive scale error).
+    pub match_prior_per_m: f64,
     /// Occupancy grid cell size, metres.
     pub map_resolution_m: f64,
 }
@@ -229,6 +234,8 @@ impl Config {
                 rotation_search_deg: 6.0,
                 travel_rule: TravelRuleCfg::ScanMatched,
                 keyframe_m: 1.0,
+                match_prior_m: 0.005,
+                match_prior_per_m: 0.02,
                 map_resolution_m: 0.05,
             },
             navigator: NavigatorCfg {
@@ -341,6 +348,11 @@ impl Config {
             self.localiser.rotation_search_deg,
         )?;
         pos("localiser.keyframe_m", self.localiser.keyframe_m)?;
+        pos("localiser.match_prior_m", self.localiser.match_prior_m)?;
+        nonneg(
+            "localiser.match_prior_per_m",
+            self.localiser.match_prior_per_m,
+        )?;
         pos(
             "localiser.map_resolution_m",
             self.localiser.map_resolution_m,

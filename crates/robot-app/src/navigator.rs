@@ -456,6 +456,12 @@ impl<'a, L: LaserSource, M: MotionBase + ?Sized> Navigator<'a, L, M> {
         params: &localiser::MatchParams,
     ) -> Pose2 {
         let guess = Pose2::new(ahead_m, 0.0, 0.0);
+        // The guess is as good as the drive: its error grows with the distance.
+        let params = &localiser::MatchParams {
+            prior_sigma_m: self.cfg.localiser.match_prior_m
+                + self.cfg.localiser.match_prior_per_m * ahead_m.abs(),
+            ..*params
+        };
         match target.align(&self.geometry, scan, guess, params) {
             Some(m) => {
                 tracing::debug!(
