@@ -160,6 +160,8 @@ const EMPTY: u32 = 0;
 const SOLID: u32 = 1;
 /// Plane value of a cell holding shapes.
 const LIST: u8 = 255;
+/// A lane of the ray caster with no ray.
+const IDLE: usize = usize::MAX;
 
 /// The simulated world: where obstacles are. Cheap to share with `Arc`.
 ///
@@ -587,7 +589,7 @@ impl World {
             return r;
         }
         loop {
-            if let Some(r) = self.ray_step(&mut ray) {
+            if let Some(r) = self.ray_step::<true>(&mut ray) {
                 return r;
             }
         }
@@ -717,18 +719,19 @@ impl World {
     }
 
     /// Advances a ray by one empty square (or one cell holding shapes); the answer once it is known.
+    /// Without `SHAPES` the world must have no cells holding shapes (a pure bitmap).
     #[inline(always)]
-    fn ray_step(&self, r: &mut Ray) -> Option<Option<f64>> {
+    fn ray_step<const SHAPES: bool>(&self, r: &mut Ray) -> Option<Option<f64>> {
         let (cx, cy) = (r.cx, r.cy);
         let k = r.plane[cy as usize * self.nx + cx as usize];
         if k == 0 {
             return Some((r.t <= r.max).then_some(r.t));
         }
-        let kk = if k == LIST { 1 } else { i32::from(k) };
+        let kk = if SHAPES && k == LIST { 1 } else { i32::from(k) };
         let ex = ((cx + kk) as f64 - r.ox) * r.ix;
         let ey = ((cy + kk) as f64 - r.oy) * r.iy;
         let e = if ex < ey { ex } else { ey };
-        if k == LIST && self.test_list(r, e) {
+        if SHAPES && k == LIST && self.test_list(r, e) {
             return Some((r.best <= r.max).then_some(r.best));
         }
         if e > r.t1 {
@@ -785,7 +788,6 @@ impl World {
         out: &mut [f64],
     ) {
         const LANES: usize = 6;
-        const IDLE: usize = usize::MAX;
         let n = out.len();
         let eye = self.eye(o);
         let mut next = 0;
@@ -806,21 +808,13 @@ impl World {
         for (id, ray) in ids.iter_mut().zip(rays.iter_mut()) {
             *id = refill(&mut next, out, ray);
         }
-        loop {
-            let mut active = false;
-            for (id, ray) in ids.iter_mut().zip(rays.iter_mut()) {
-                if *id == IDLE {
-                    continue;
-                }
-                active = true;
-                if let Some(res) = self.ray_step(ray) {
-                    out[*id] = res.unwrap_or(f64::INFINITY);
-                    *id = refill(&mut next, out, ray);
-                }
-            }
-            if !active {
-                break;
-            }
+        // A world without shapes has no cells holding shapes.
+        if self.prims.is_empty() {
+            let step = |ray: &mut Ray<'a>| self.ray_step::<false>(ray);
+            run_lanes(&mut ids, &mut rays, step, &mut next, out, &mut refill);
+        } else {
+            let step = |ray: &mut Ray<'a>| self.ray_step::<true>(ray);
+            run_lanes(&mut ids, &mut rays, step, &mut next, out, &mut refill);
         }
     }
 
@@ -958,6 +952,35 @@ impl World {
             }
         }
         false
+    }
+}
+
+/// Steps the rays of `lanes` in turn until every ray is answered, writing answers to `out` and
+/// starting the next rays with `refill`.
+#[inline(always)]
+fn run_lanes<'a, const L: usize>(
+    ids: &mut [usize; L],
+    rays: &mut [Ray<'a>; L],
+    step: impl Fn(&mut Ray<'a>) -> Option<Option<f64>>,
+    next: &mut usize,
+    out: &mut [f64],
+    refill: &mut impl FnMut(&mut usize, &mut [f64], &mut Ray<'a>) -> usize,
+) {
+    loop {
+        let mut active = false;
+        for (id, ray) in ids.iter_mut().zip(rays.iter_mut()) {
+            if *id == IDLE {
+                continue;
+            }
+            active = true;
+            if let Some(res) = step(ray) {
+                out[*id] = res.unwrap_or(f64::INFINITY);
+                *id = refill(next, out, ray);
+            }
+        }
+        if !active {
+            break;
+        }
     }
 }
 

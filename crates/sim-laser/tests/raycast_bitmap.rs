@@ -83,6 +83,25 @@ fn bitmap_ray_caster_matches_brute_force() {
             }
             checked += 1;
         }
+        // Whole scans (several rays at once) against the reference too.
+        let g = ScanGeometry::new(-2.0, 0.01, 400, 0.0, 3.0).unwrap();
+        for _ in 0..5 {
+            let pose = Pose2::new(
+                rng.random_range(-1.2..1.6),
+                rng.random_range(-0.6..1.0),
+                rng.random_range(-3.2..3.2),
+            );
+            if world.is_occupied(pose.position()) {
+                continue;
+            }
+            let scan = true_scan(&world, &pose, &g);
+            for (i, &r) in scan.ranges_m.iter().enumerate() {
+                let a = pose.theta_rad + g.bearing_rad(i);
+                let want = reference(&b, [pose.x_m, pose.y_m], [a.cos(), a.sin()], 3.0);
+                let want = want.unwrap_or(3.0);
+                assert!((r - want).abs() < 1e-9, "{pose:?} ray {i}: {r} vs {want}");
+            }
+        }
     }
     assert!(checked > 500, "{checked}");
 }
