@@ -1,9 +1,7 @@
 //! Detection rules on hand-built scans whose landmarks can be placed by hand.
 
-mod common;
-
-use common::{boxed, noisy, scan_at};
 use landmarks::{DetectParams, LandmarkKind, OpenSide, detect, select_nearest};
+use scan_types::testkit::{boxed, noisy, scan_at};
 use scan_types::{RayStatus, Scan, ScanGeometry, WorldPoint};
 use std::f64::consts::FRAC_PI_2;
 

@@ -1,13 +1,15 @@
 //! Tracking on hand-built scans: a robot driving past a box.
 
-mod common;
-
-use common::{boxed, noisy, scan_at};
 use landmarks::{DetectParams, TrackParams, TrackUpdate, Tracker, detect};
+use scan_types::testkit::{boxed, noisy, scan_at};
 use scan_types::{ScanGeometry, WorldPoint};
 
 /// The right silhouette edge (3, 1) of the box x 2..3, y 1..2 seen from the origin.
-fn start() -> (ScanGeometry, Vec<common::Seg>, landmarks::Landmark) {
+fn start() -> (
+    ScanGeometry,
+    Vec<scan_types::testkit::Seg>,
+    landmarks::Landmark,
+) {
     let g = ScanGeometry::paper();
     let walls = boxed(2.0, 1.0, 3.0, 2.0);
     let scan = scan_at(&g, &walls, 0.0, 0.0, 0.0);

@@ -1,10 +1,8 @@
 //! The occupancy grid and the point map on a hand-built room, and the map_server export
 //! read back as Nav2's loader would.
 
-mod common;
-
-use common::{boxed, scan_at};
 use localiser::{CellState, OccupancyGrid, PointMap, pixel};
+use scan_types::testkit::{boxed, scan_at};
 use scan_types::{Pose2, RayStatus, ScanGeometry, WorldPoint};
 
 /// A 4 m x 3 m room (x 0.02..4.02, y 0.02..3.02: walls mid-cell) seen from (1, 1) facing +x with a 360-deg, 1-deg sensor.

@@ -1,13 +1,11 @@
 //! Heading from the scans: the rotation that best aligns the scans before and after a turn,
 //! against the commanded rotation, in a hand-made room.
 
-mod common;
-
-use common::{Seg, boxed, scan_at};
 use localiser::{HeadingRule, heading_after_rotation, measure_rotation};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
+use scan_types::testkit::{Seg, boxed, scan_at};
 use scan_types::{RayStatus, Scan, ScanGeometry};
 
 /// An 8 m x 6 m room (x -4..4, y -3..3) with two boxes and a slanted wall piece.

@@ -1,13 +1,11 @@
 //! Triangles OBC / OAB and the arrival at B, checked against the paper's numbers and
 //! hand-built scans.
 
-mod common;
-
-use common::{boxed, scan_at};
 use landmarks::{DetectParams, TrackParams, TrackUpdate, Tracker, detect};
 use localiser::{
     ArrivalHow, ArrivalParams, ArrivalRule, Side, check_arrival, travelled_from_fallback, triangle,
 };
+use scan_types::testkit::{boxed, scan_at};
 use scan_types::{Pose2, ScanGeometry, WorldPoint};
 use std::f64::consts::FRAC_PI_2;
 

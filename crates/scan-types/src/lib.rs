@@ -25,6 +25,8 @@ mod motion;
 mod pose;
 mod scan;
 mod source;
+#[cfg(feature = "testkit")]
+pub mod testkit;
 
 pub use angle::{angle_diff_rad, normalize_angle_rad};
 pub use error::ScanTypesError;
