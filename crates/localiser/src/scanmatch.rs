@@ -88,20 +88,22 @@ struct Oriented {
     n: [f64; 2],
 }
 
+/// Side of a cell of the nearest-neighbour index, metres.
+const CELL_M: f64 = 0.1;
+
 /// Reference points (hits with surface normals) in one frame, indexed for nearest-neighbour
 /// search.
 #[derive(Debug, Clone)]
 pub struct MatchTarget {
     points: Vec<Oriented>,
-    cell_m: f64,
     /// Lower-left corner of cell (0, 0) and the grid size.
     origin: [f64; 2],
     width: usize,
     height: usize,
-    /// Cell start offsets into `order` (width * height + 1 entries) and the point indices
-    /// sorted by cell.
+    /// Cell start offsets into `sorted` (width * height + 1 entries).
     starts: Vec<u32>,
-    order: Vec<u32>,
+    /// The points sorted by cell (by index within a cell).
+    sorted: Vec<Oriented>,
     dirty: bool,
 }
 
@@ -116,12 +118,11 @@ impl MatchTarget {
     pub fn new() -> Self {
         Self {
             points: Vec::new(),
-            cell_m: 0.25,
             origin: [0.0, 0.0],
             width: 0,
             height: 0,
             starts: Vec::new(),
-            order: Vec::new(),
+            sorted: Vec::new(),
             dirty: false,
         }
     }
@@ -169,79 +170,123 @@ impl MatchTarget {
             return;
         }
         self.dirty = false;
-        if self.points.is_empty() {
-            self.width = 0;
-            self.height = 0;
-            self.starts.clear();
-            self.order.clear();
-            return;
-        }
+        self.sorted.clear();
+        self.starts.clear();
+        // Non-finite points can never match: leave them out of the index.
         let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
-        for o in &self.points {
+        for o in self.points.iter().filter(|o| is_finite2(o.p)) {
             for k in 0..2 {
                 lo[k] = lo[k].min(o.p[k]);
                 hi[k] = hi[k].max(o.p[k]);
             }
         }
+        if lo[0] > hi[0] {
+            self.width = 0;
+            self.height = 0;
+            return;
+        }
         self.origin = lo;
-        self.width = ((hi[0] - lo[0]) / self.cell_m).floor() as usize + 1;
-        self.height = ((hi[1] - lo[1]) / self.cell_m).floor() as usize + 1;
+        self.width = floor_nonneg((hi[0] - lo[0]) / CELL_M) + 1;
+        self.height = floor_nonneg((hi[1] - lo[1]) / CELL_M) + 1;
         let cells = self.width * self.height;
         let mut counts = vec![0u32; cells + 1];
-        let cell_of: Vec<usize> = self.points.iter().map(|o| self.cell(o.p)).collect();
-        for &c in &cell_of {
+        let cell_of: Vec<Option<usize>> = self
+            .points
+            .iter()
+            .map(|o| is_finite2(o.p).then(|| self.cell(o.p)))
+            .collect();
+        for &c in cell_of.iter().flatten() {
             counts[c + 1] += 1;
         }
         for i in 0..cells {
             counts[i + 1] += counts[i];
         }
         let mut fill = counts.clone();
-        self.order = vec![0; self.points.len()];
-        for (i, &c) in cell_of.iter().enumerate() {
-            self.order[fill[c] as usize] = i as u32;
-            fill[c] += 1;
+        let placeholder = Oriented {
+            p: [0.0; 2],
+            n: [0.0; 2],
+        };
+        self.sorted = vec![placeholder; counts[cells] as usize];
+        for (o, c) in self.points.iter().zip(&cell_of) {
+            if let Some(c) = *c {
+                self.sorted[fill[c] as usize] = *o;
+                fill[c] += 1;
+            }
         }
         self.starts = counts;
     }
 
     fn cell(&self, p: [f64; 2]) -> usize {
-        let cx = (((p[0] - self.origin[0]) / self.cell_m).floor() as usize).min(self.width - 1);
-        let cy = (((p[1] - self.origin[1]) / self.cell_m).floor() as usize).min(self.height - 1);
+        let cx = floor_nonneg((p[0] - self.origin[0]) / CELL_M).min(self.width - 1);
+        let cy = floor_nonneg((p[1] - self.origin[1]) / CELL_M).min(self.height - 1);
         cy * self.width + cx
     }
 
     /// The reference point nearest `q` within `gate` whose normal agrees with `n`.
+    ///
+    /// First searches the cells within `min(gate, CELL_M / 2)` of `q`: a point found there
+    /// nearer than that radius is the nearest overall (every point outside those cells lies
+    /// farther away). Otherwise searches every cell within `gate`.
     fn nearest(&self, q: [f64; 2], n: [f64; 2], gate: f64, min_cos: f64) -> Option<&Oriented> {
-        if self.width == 0 {
+        if self.width == 0 || !is_finite2(q) || gate.is_nan() || gate < 0.0 {
             return None;
         }
-        let fx = (q[0] - self.origin[0]) / self.cell_m;
-        let fy = (q[1] - self.origin[1]) / self.cell_m;
-        let reach = gate / self.cell_m;
-        let x0 = (fx - reach).floor().max(0.0);
-        let y0 = (fy - reach).floor().max(0.0);
-        let x1 = (fx + reach).floor().min((self.width - 1) as f64);
-        let y1 = (fy + reach).floor().min((self.height - 1) as f64);
-        if x0 > x1 || y0 > y1 {
+        let near = gate.min(0.5 * CELL_M);
+        if let Some((d2, o)) = self.nearest_in(q, n, near, gate, min_cos) {
+            // Margin for the rounding of cell assignment.
+            let sure = (near - 1e-9).max(0.0);
+            if d2 < sure * sure || near >= gate {
+                return Some(o);
+            }
+        } else if near >= gate {
             return None;
         }
+        self.nearest_in(q, n, gate, gate, min_cos).map(|(_, o)| o)
+    }
+
+    /// The nearest point within `gate` (squared distance and point) among the cells within
+    /// `reach` of `q`.
+    fn nearest_in(
+        &self,
+        q: [f64; 2],
+        n: [f64; 2],
+        reach: f64,
+        gate: f64,
+        min_cos: f64,
+    ) -> Option<(f64, &Oriented)> {
+        let fx = (q[0] - self.origin[0]) / CELL_M;
+        let fy = (q[1] - self.origin[1]) / CELL_M;
+        let r = reach / CELL_M;
+        let (wmax, hmax) = ((self.width - 1) as f64, (self.height - 1) as f64);
+        let x1 = floor(fx + r);
+        let y1 = floor(fy + r);
+        if x1 < 0.0 || y1 < 0.0 {
+            return None;
+        }
+        let x0 = floor(fx - r).max(0.0);
+        let y0 = floor(fy - r).max(0.0);
+        if x0 > wmax || y0 > hmax {
+            return None;
+        }
+        let (x0, x1) = (x0 as usize, x1.min(wmax) as usize);
+        let (y0, y1) = (y0 as usize, y1.min(hmax) as usize);
+        let g2 = gate * gate;
         let mut best: Option<(f64, &Oriented)> = None;
-        for cy in y0 as usize..=y1 as usize {
-            for cx in x0 as usize..=x1 as usize {
-                let c = cy * self.width + cx;
-                for &k in &self.order[self.starts[c] as usize..self.starts[c + 1] as usize] {
-                    let o = &self.points[k as usize];
-                    let d2 = (o.p[0] - q[0]).powi(2) + (o.p[1] - q[1]).powi(2);
-                    if d2 > gate * gate || o.n[0] * n[0] + o.n[1] * n[1] < min_cos {
-                        continue;
-                    }
-                    if best.is_none_or(|(b, _)| d2 < b) {
-                        best = Some((d2, o));
-                    }
+        for cy in y0..=y1 {
+            let row = cy * self.width;
+            // The cells of one row are contiguous in `sorted`.
+            let span = self.starts[row + x0] as usize..self.starts[row + x1 + 1] as usize;
+            for o in &self.sorted[span] {
+                let d2 = (o.p[0] - q[0]).powi(2) + (o.p[1] - q[1]).powi(2);
+                if d2 > g2 || o.n[0] * n[0] + o.n[1] * n[1] < min_cos {
+                    continue;
+                }
+                if best.is_none_or(|(b, _)| d2 < b) {
+                    best = Some((d2, o));
                 }
             }
         }
-        best.map(|(_, o)| o)
+        best
     }
 
     /// The pose of `scan` in the target's frame, starting from `guess`; `None` when too few
@@ -346,6 +391,23 @@ impl MatchTarget {
     }
 }
 
+/// True when both coordinates are finite.
+fn is_finite2(p: [f64; 2]) -> bool {
+    p[0].is_finite() && p[1].is_finite()
+}
+
+/// `x.floor()` for finite `x` of magnitude below 2^52 without a libm call (the baseline
+/// x86-64 target has no rounding instruction).
+fn floor(x: f64) -> f64 {
+    let t = x as i64 as f64;
+    if t > x { t - 1.0 } else { t }
+}
+
+/// `floor(x)` as an index, for finite `x >= 0`.
+fn floor_nonneg(x: f64) -> usize {
+    x as usize
+}
+
 /// Standard deviation along the worst direction of the position block of the covariance
 /// `h^-1` (3 x 3 information matrix: x, y, theta).
 fn worst_position_sigma(h: &[[f64; 3]; 3]) -> f64 {
@@ -412,11 +474,16 @@ fn oriented_hits(geometry: &ScanGeometry, scan: &Scan, params: &MatchParams) -> 
         .collect();
     let k = params.normal_rays.max(1);
     let mut out = Vec::with_capacity(n);
+    let mut members = Vec::with_capacity(2 * k + 1);
+    // Squared thresholds: no square root per neighbour.
+    let surface2 = params.surface_m * params.surface_m;
+    let half2 = params.normal_half_length_m * params.normal_half_length_m;
     for i in 0..n {
         let Some(p) = pts[i] else { continue };
         let (px, py) = (p.x_m(), p.y_m());
         // Walk outwards on each side while the hits stay on the surface.
-        let mut members = vec![(px, py)];
+        members.clear();
+        members.push((px, py));
         for dir in [-1i64, 1] {
             let mut prev = (px, py);
             for step in 1..=k as i64 {
@@ -426,8 +493,8 @@ fn oriented_hits(geometry: &ScanGeometry, scan: &Scan, params: &MatchParams) -> 
                 }
                 let Some(q) = pts[j as usize] else { break };
                 let q = (q.x_m(), q.y_m());
-                if (q.0 - prev.0).hypot(q.1 - prev.1) > params.surface_m
-                    || (q.0 - px).hypot(q.1 - py) > params.normal_half_length_m
+                if (q.0 - prev.0).powi(2) + (q.1 - prev.1).powi(2) > surface2
+                    || (q.0 - px).powi(2) + (q.1 - py).powi(2) > half2
                 {
                     break;
                 }
@@ -611,6 +678,82 @@ mod tests {
         assert!(t.is_empty());
         let s = cast(&room(), Pose2::default(), None);
         assert!(t.align(&g, &s, Pose2::default(), &p).is_none());
+    }
+
+    #[test]
+    fn index_finds_the_brute_force_nearest() {
+        // Points on a few hand-placed segments (normals up or right) plus scattered ones.
+        let mut t = MatchTarget::new();
+        for k in 0..200 {
+            let u = k as f64 * 0.01;
+            t.points.push(Oriented {
+                p: [-1.0 + u, 0.5],
+                n: [0.0, 1.0],
+            });
+            t.points.push(Oriented {
+                p: [0.7, -1.0 + 0.013 * k as f64],
+                n: [1.0, 0.0],
+            });
+        }
+        let mut state = 12345u64;
+        let mut uniform = || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((state >> 11) as f64) / ((1u64 << 53) as f64)
+        };
+        for _ in 0..100 {
+            let a = uniform() * std::f64::consts::TAU;
+            t.points.push(Oriented {
+                p: [uniform() * 3.0 - 1.5, uniform() * 3.0 - 1.5],
+                n: [a.cos(), a.sin()],
+            });
+        }
+        t.dirty = true;
+        t.index();
+        let min_cos = 0.5;
+        for _ in 0..2000 {
+            let q = [uniform() * 4.0 - 2.0, uniform() * 4.0 - 2.0];
+            let a = uniform() * std::f64::consts::TAU;
+            let n = [a.cos(), a.sin()];
+            for gate in [0.01, 0.05, 0.06, 0.12, 0.3, 1.0] {
+                // Brute force: the first point of least squared distance within the gate.
+                let mut want: Option<(f64, &Oriented)> = None;
+                for o in &t.points {
+                    let d2 = (o.p[0] - q[0]).powi(2) + (o.p[1] - q[1]).powi(2);
+                    if d2 <= gate * gate
+                        && o.n[0] * n[0] + o.n[1] * n[1] >= min_cos
+                        && want.is_none_or(|(b, _)| d2 < b)
+                    {
+                        want = Some((d2, o));
+                    }
+                }
+                assert_eq!(
+                    t.nearest(q, n, gate, min_cos),
+                    want.map(|w| w.1),
+                    "{q:?} {gate}"
+                );
+            }
+        }
+        assert_eq!(t.nearest([f64::NAN, 0.0], [1.0, 0.0], 0.3, 0.5), None);
+    }
+
+    #[test]
+    fn floor_matches_std() {
+        for x in [
+            -2.5,
+            -2.0,
+            -1e-300,
+            -0.0,
+            0.0,
+            1e-300,
+            0.5,
+            1.0,
+            3.999,
+            1e15 + 0.5,
+        ] {
+            assert_eq!(floor(x), x.floor(), "{x}");
+        }
     }
 
     #[test]
