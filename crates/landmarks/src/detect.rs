@@ -223,11 +223,18 @@ impl DetectParams {
     }
 }
 
-/// One usable ray: its index and, for a hit, its range.
+/// One usable ray: its index and, for a hit, its range and point (origin for a miss).
 #[derive(Debug, Clone, Copy)]
 struct Ray {
     index: usize,
     hit: Option<f64>,
+    pt: RobotPoint,
+}
+
+/// Distance between two points (as `RobotPoint::distance_m`, inlined).
+fn dist(a: &RobotPoint, b: &RobotPoint) -> f64 {
+    let (dx, dy) = (b.x_m() - a.x_m(), b.y_m() - a.y_m());
+    (dx * dx + dy * dy).sqrt()
 }
 
 /// Finds the landmarks of `scan`, sorted by ray index.
@@ -276,10 +283,12 @@ fn segments(geometry: &ScanGeometry, scan: &Scan, max_gap: usize) -> Vec<Vec<Ray
             RayStatus::Hit if r.is_finite() && r > 0.0 => Ray {
                 index: i,
                 hit: Some(r),
+                pt: geometry.robot_point(i, r),
             },
             RayStatus::MaxRange => Ray {
                 index: i,
                 hit: None,
+                pt: RobotPoint::new(0.0, 0.0),
             },
             _ => {
                 gap += 1;
@@ -331,24 +340,24 @@ fn jumps(geometry: &ScanGeometry, seg: &[Ray], params: &DetectParams, out: &mut 
             if params.min_gap_width_m > 0.0
                 && k >= 0
                 && k < len
-                && let (Some(r0), Some(r1)) = (seg[j as usize].hit, seg[k as usize].hit)
+                && seg[j as usize].hit.is_some()
+                && seg[k as usize].hit.is_some()
             {
-                let a = geometry.robot_point(seg[j as usize].index, r0);
-                let b = geometry.robot_point(seg[k as usize].index, r1);
-                if a.distance_m(&b) < params.min_gap_width_m {
+                let (a, b) = (seg[j as usize].pt, seg[k as usize].pt);
+                if dist(&a, &b) < params.min_gap_width_m {
                     continue;
                 }
             }
             if params.reject_bridged_dropouts
                 && k >= 0
                 && k < len
-                && let (Some(r0), Some(r1)) = (seg[j as usize].hit, seg[k as usize].hit)
+                && seg[j as usize].hit.is_some()
+                && let Some(r1) = seg[k as usize].hit
             {
-                let a = geometry.robot_point(seg[j as usize].index, r0);
-                let b = geometry.robot_point(seg[k as usize].index, r1);
+                let (a, b) = (seg[j as usize].pt, seg[k as usize].pt);
                 let mut pts = vec![a];
-                pts.extend(arm(geometry, seg, j as usize, dir, params));
-                if a.distance_m(&b) < params.dropout_max_width_m
+                arm_into(seg, j as usize, dir, params, &mut pts);
+                if dist(&a, &b) < params.dropout_max_width_m
                     && pts.len() >= 3
                     && let Some((c, d, _)) = fit_line(&pts)
                     && let Some(t) =
@@ -419,34 +428,34 @@ fn occlusions(
     }
 }
 
-/// Hits continuing the surface from `pos` in direction `dir` (excluding `pos`), within
-/// `arm_m` of the hit at `pos` and without range jumps.
-fn arm(
-    geometry: &ScanGeometry,
+/// Appends to `out` the hits continuing the surface from `pos` in direction `dir` (excluding
+/// `pos`), within `arm_m` of the hit at `pos` and without range jumps; returns how many.
+fn arm_into(
     seg: &[Ray],
     pos: usize,
     dir: isize,
     params: &DetectParams,
-) -> Vec<RobotPoint> {
-    let mut pts = Vec::new();
-    let Some(r0) = seg[pos].hit else { return pts };
-    let origin = geometry.robot_point(seg[pos].index, r0);
+    out: &mut Vec<RobotPoint>,
+) -> usize {
+    let Some(r0) = seg[pos].hit else { return 0 };
+    let before = out.len();
+    let origin = seg[pos].pt;
     let mut prev = r0;
     let mut k = pos as isize + dir;
     while k >= 0 && (k as usize) < seg.len() {
-        let Some(r) = seg[k as usize].hit else { break };
+        let ray = &seg[k as usize];
+        let Some(r) = ray.hit else { break };
         if (r - prev).abs() > params.occlusion_jump_m {
             break;
         }
-        let p = geometry.robot_point(seg[k as usize].index, r);
-        if p.distance_m(&origin) > params.arm_m {
+        if dist(&origin, &ray.pt) > params.arm_m {
             break;
         }
-        pts.push(p);
+        out.push(ray.pt);
         prev = r;
         k += dir;
     }
-    pts
+    out.len() - before
 }
 
 /// Least-squares line through points: (centroid, unit direction, RMS residual).
@@ -508,9 +517,13 @@ fn edge_landmark(
         OpenSide::Higher => (&[-1], &[1]),
         OpenSide::Both => (&[], &[-1, 1]),
     };
-    let mut support = vec![geometry.robot_point(ray.index, range)];
+    let l = match ray.hit {
+        Some(_) => ray.pt,
+        None => geometry.robot_point(ray.index, range),
+    };
+    let mut support = vec![l];
     for &d in surface_dirs {
-        support.extend(arm(geometry, seg, pos, d, params));
+        arm_into(seg, pos, d, params, &mut support);
     }
     let near_range_limit = range >= geometry.max_range_m - params.range_limit_margin_m;
     // Extrapolate the surface onto the open neighbour ray.
@@ -529,7 +542,6 @@ fn edge_landmark(
             }
         }
     }
-    let l = geometry.robot_point(ray.index, range);
     let (mut range_out, mut bearing_out) = (range, bearing);
     if params.edge_refine && support.len() >= 3 && side != OpenSide::Both {
         let od = open_dirs[0];
@@ -590,28 +602,32 @@ fn score(l: &Landmark, params: &DetectParams) -> f64 {
 fn corners(geometry: &ScanGeometry, seg: &[Ray], params: &DetectParams, out: &mut Vec<Landmark>) {
     // (pos, turn angle, refined point)
     let mut cands: Vec<(usize, f64, RobotPoint)> = Vec::new();
+    // Each arm with the corner point first.
+    let (mut lo, mut hi) = (Vec::new(), Vec::new());
     for pos in 0..seg.len() {
-        let Some(r) = seg[pos].hit else { continue };
-        let p = geometry.robot_point(seg[pos].index, r);
-        let lo = arm(geometry, seg, pos, -1, params);
-        let hi = arm(geometry, seg, pos, 1, params);
-        let min_len = 0.5 * params.arm_m;
-        let long_enough = |a: &[RobotPoint]| {
-            a.len() >= params.corner_min_arm_rays
-                && a.last().is_some_and(|q| q.distance_m(&p) >= min_len)
-        };
-        if !long_enough(&lo) || !long_enough(&hi) {
+        if seg[pos].hit.is_none() {
             continue;
         }
-        let with_p = |a: &[RobotPoint]| {
-            let mut v = Vec::with_capacity(a.len() + 1);
-            v.push(p);
-            v.extend_from_slice(a);
-            v
+        let p = seg[pos].pt;
+        let min_len = 0.5 * params.arm_m;
+        let long_enough = |a: &[RobotPoint]| {
+            a.len() > 1
+                && a.len() > params.corner_min_arm_rays
+                && a.last().is_some_and(|q| dist(&p, q) >= min_len)
         };
-        let (Some((c1, d1, e1)), Some((c2, d2, e2))) =
-            (fit_line(&with_p(&lo)), fit_line(&with_p(&hi)))
-        else {
+        lo.clear();
+        lo.push(p);
+        arm_into(seg, pos, -1, params, &mut lo);
+        if !long_enough(&lo) {
+            continue;
+        }
+        hi.clear();
+        hi.push(p);
+        arm_into(seg, pos, 1, params, &mut hi);
+        if !long_enough(&hi) {
+            continue;
+        }
+        let (Some((c1, d1, e1)), Some((c2, d2, e2))) = (fit_line(&lo), fit_line(&hi)) else {
             continue;
         };
         if e1 > params.corner_max_residual_m || e2 > params.corner_max_residual_m {
@@ -642,8 +658,9 @@ fn corners(geometry: &ScanGeometry, seg: &[Ray], params: &DetectParams, out: &mu
             }
         }
         let (pos, _, pt) = cands[best];
-        let mut support = arm(geometry, seg, pos, -1, params).len()
-            + arm(geometry, seg, pos, 1, params).len()
+        let mut scratch = Vec::new();
+        let mut support = arm_into(seg, pos, -1, params, &mut scratch)
+            + arm_into(seg, pos, 1, params, &mut scratch)
             + 1;
         support = support.max(1);
         let range = pt.range_m();
