@@ -150,7 +150,8 @@ fn cost(
         if j < 0.0 || j > (n - 1) as f64 {
             continue;
         }
-        let j0 = j.floor() as usize;
+        // j >= 0: truncation is the floor (and needs no libm call).
+        let j0 = j as usize;
         let j1 = (j0 + 1).min(n - 1);
         let d = match (before[j0], before[j1]) {
             (Some(b0), Some(b1)) => {
