@@ -89,7 +89,10 @@ struct Oriented {
 }
 
 /// Side of a cell of the nearest-neighbour index, metres.
-const CELL_M: f64 = 0.1;
+const CELL_M: f64 = 0.05;
+
+/// Radius of the first, narrow nearest-neighbour search, metres.
+const NEAR_M: f64 = 0.02;
 
 /// Reference points (hits with surface normals) in one frame, indexed for nearest-neighbour
 /// search.
@@ -224,14 +227,14 @@ impl MatchTarget {
 
     /// The reference point nearest `q` within `gate` whose normal agrees with `n`.
     ///
-    /// First searches the cells within `min(gate, CELL_M / 2)` of `q`: a point found there
+    /// First searches the cells within `min(gate, NEAR_M)` of `q`: a point found there
     /// nearer than that radius is the nearest overall (every point outside those cells lies
     /// farther away). Otherwise searches every cell within `gate`.
     fn nearest(&self, q: [f64; 2], n: [f64; 2], gate: f64, min_cos: f64) -> Option<&Oriented> {
         if self.width == 0 || !is_finite2(q) || gate.is_nan() || gate < 0.0 {
             return None;
         }
-        let near = gate.min(0.5 * CELL_M);
+        let near = gate.min(NEAR_M);
         if let Some((d2, o)) = self.nearest_in(q, n, near, gate, min_cos) {
             // Margin for the rounding of cell assignment.
             let sure = (near - 1e-9).max(0.0);
@@ -315,6 +318,7 @@ impl MatchTarget {
         let mut gate = params.initial_gate_m.max(params.final_gate_m);
         let mut iterations = 0;
         let mut last = None;
+        let mut prev_step = None;
         for it in 0..params.max_iterations.max(1) {
             iterations = it + 1;
             let (s, c) = x[2].sin_cos();
@@ -367,6 +371,16 @@ impl MatchTarget {
             let small = step[0].hypot(step[1]) < 1e-5 && step[2].abs() < 1e-5;
             if small && gate <= params.final_gate_m {
                 break;
+            }
+            if gate <= params.final_gate_m {
+                // A step that undoes the previous one: correspondences flipping back and
+                // forth between two poses, which further iterations only repeat.
+                if prev_step
+                    .is_some_and(|p: [f64; 3]| (0..3).all(|a| (step[a] + p[a]).abs() < 1e-8))
+                {
+                    break;
+                }
+                prev_step = Some(step);
             }
             gate = (gate * params.gate_shrink).max(params.final_gate_m);
         }
