@@ -117,31 +117,102 @@ fn readings(geometry: &ScanGeometry, scan: &Scan) -> Vec<Option<Reading>> {
 /// Neighbouring hits closer in range than this lie on one surface (else: an edge), metres.
 const SMOOTH_M: f64 = 0.1;
 
-/// Mean clipped squared difference and pair count at fractional shift `s` (rays).
-fn cost(
-    before: &[Option<Reading>],
-    after: &[Option<Reading>],
-    s: f64,
-    clip: f64,
-    inc: f64,
-) -> (f64, usize) {
+/// What the scan before the rotation shows between rays `j` and `j + 1`, prepared once for
+/// every shift [`cost`] tries.
+#[derive(Clone, Copy)]
+enum Pair {
+    /// Neither ray usable.
+    Empty,
+    /// One usable ray.
+    Single(Reading),
+    /// Both max range, or both hits on one surface (ranges within `SMOOTH_M`).
+    Smooth {
+        b0: Reading,
+        b1: Reading,
+        /// The segment between the two hit points in the frame of ray `j`: `(r1 cos inc -
+        /// r0, r1 sin inc)` and `r0` times its second coordinate.
+        dx: f64,
+        dy: f64,
+        num: f64,
+    },
+    /// A discontinuity between the two rays.
+    Edge(Reading, Reading),
+}
+
+/// The [`Pair`]s of `before`: entry `j` pairs ray `j` with ray `min(j + 1, n - 1)`.
+fn pairs(before: &[Option<Reading>], inc: f64) -> Vec<Pair> {
+    let n = before.len();
+    let (si, ci) = inc.sin_cos();
+    (0..n)
+        .map(|j0| {
+            let j1 = (j0 + 1).min(n - 1);
+            match (before[j0], before[j1]) {
+                (Some(b0), Some(b1)) => {
+                    if b0.open == b1.open && (b0.range - b1.range).abs() < SMOOTH_M {
+                        let (r0, r1) = (b0.range, b1.range);
+                        let (dx, dy) = (r1 * ci - r0, r1 * si);
+                        Pair::Smooth {
+                            b0,
+                            b1,
+                            dx,
+                            dy,
+                            num: r0 * dy,
+                        }
+                    } else {
+                        Pair::Edge(b0, b1)
+                    }
+                }
+                (Some(b), None) | (None, Some(b)) => Pair::Single(b),
+                _ => Pair::Empty,
+            }
+        })
+        .collect()
+}
+
+/// `pairs` for whole-ray shifts: each smooth pair replaced by its value at the lower ray
+/// (what [`cost`] computes for it at a zero fraction), which needs no division per shift.
+fn at_rays(pairs: &[Pair], inc: f64) -> Vec<Pair> {
+    let (sp, cp) = (0.0 * inc).sin_cos();
+    pairs
+        .iter()
+        .map(|p| match *p {
+            Pair::Smooth {
+                b0,
+                b1,
+                dx,
+                dy,
+                num,
+            } => {
+                let range = if b0.open {
+                    b0.range
+                } else {
+                    let den = cp * dy - sp * dx;
+                    let t = num / den;
+                    if den.abs() > 1e-12 && t.is_finite() && t > 0.0 {
+                        t
+                    } else {
+                        b0.range + 0.0 * (b1.range - b0.range)
+                    }
+                };
+                Pair::Single(Reading {
+                    range,
+                    open: b0.open,
+                })
+            }
+            other => other,
+        })
+        .collect()
+}
+
+/// Mean clipped squared difference and pair count at fractional shift `s` (rays), with
+/// `before` prepared by [`pairs`] (or by [`at_rays`] when `s` is a whole number).
+fn cost(before: &[Pair], after: &[Option<Reading>], s: f64, clip: f64, inc: f64) -> (f64, usize) {
     let n = before.len();
     // Between two hits the surface is taken as the straight segment joining them (exact on
     // flat walls, unlike interpolating the range): in the frame of the lower ray, the hits
     // are (r0, 0) and (r1 cos inc, r1 sin inc) and the query ray points at phi = f inc.
     let frac = s - s.floor();
     let (sp, cp) = (frac * inc).sin_cos();
-    let (si, ci) = inc.sin_cos();
-    let between = |r0: f64, r1: f64| {
-        let (dx, dy) = (r1 * ci - r0, r1 * si);
-        let den = cp * dy - sp * dx;
-        let t = (r0 * dy) / den;
-        if den.abs() > 1e-12 && t.is_finite() && t > 0.0 {
-            t
-        } else {
-            r0 + frac * (r1 - r0)
-        }
-    };
     let mut sum = 0.0;
     let mut count = 0usize;
     for (i, a) in after.iter().enumerate() {
@@ -151,40 +222,49 @@ fn cost(
             continue;
         }
         // j >= 0: truncation is the floor (and needs no libm call).
-        let j0 = j as usize;
-        let j1 = (j0 + 1).min(n - 1);
-        let d = match (before[j0], before[j1]) {
-            (Some(b0), Some(b1)) => {
-                if b0.open == b1.open && (b0.range - b1.range).abs() < SMOOTH_M {
-                    // Smooth stretch: interpolate below one ray.
-                    if a.open && b0.open {
-                        continue;
-                    }
-                    let b = if b0.open {
-                        b0.range
-                    } else {
-                        between(b0.range, b1.range)
-                    };
-                    (a.range - b).abs()
-                } else {
-                    // A discontinuity between the two rays: the ray may match either side.
-                    let side = |b: Reading| {
-                        if a.open && b.open {
-                            0.0
-                        } else {
-                            (a.range - b.range).abs()
-                        }
-                    };
-                    side(b0).min(side(b1))
+        let d = match before[j as usize] {
+            Pair::Smooth {
+                b0,
+                b1,
+                dx,
+                dy,
+                num,
+            } => {
+                // Smooth stretch: interpolate below one ray.
+                if a.open && b0.open {
+                    continue;
                 }
+                let b = if b0.open {
+                    b0.range
+                } else {
+                    let den = cp * dy - sp * dx;
+                    let t = num / den;
+                    if den.abs() > 1e-12 && t.is_finite() && t > 0.0 {
+                        t
+                    } else {
+                        b0.range + frac * (b1.range - b0.range)
+                    }
+                };
+                (a.range - b).abs()
             }
-            (Some(b), None) | (None, Some(b)) => {
+            Pair::Edge(b0, b1) => {
+                // A discontinuity between the two rays: the ray may match either side.
+                let side = |b: Reading| {
+                    if a.open && b.open {
+                        0.0
+                    } else {
+                        (a.range - b.range).abs()
+                    }
+                };
+                side(b0).min(side(b1))
+            }
+            Pair::Single(b) => {
                 if a.open && b.open {
                     continue;
                 }
                 (a.range - b.range).abs()
             }
-            _ => continue,
+            Pair::Empty => continue,
         };
         let d = d.min(clip);
         sum += d * d;
@@ -214,8 +294,11 @@ pub fn measure_rotation_with(
     let centre = commanded_rad / inc;
     let half = (params.search_rad.abs() / inc.abs()).ceil() as i64;
     let clip = params.clip_m;
+    let b = pairs(&b, inc);
+    let whole = at_rays(&b, inc);
     let eval = |s: f64| {
-        let (c, k) = cost(&b, &a, s, clip, inc);
+        let table = if s == s.floor() { &whole } else { &b };
+        let (c, k) = cost(table, &a, s, clip, inc);
         if k >= params.min_pairs {
             (c, k)
         } else {
@@ -271,4 +354,139 @@ pub fn measure_rotation_with(
         rms_m: rms,
         pairs,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The cost before `Pair`s (the reference the prepared one must equal).
+    fn cost_reference(
+        before: &[Option<Reading>],
+        after: &[Option<Reading>],
+        s: f64,
+        clip: f64,
+        inc: f64,
+    ) -> (f64, usize) {
+        let n = before.len();
+        // Between two hits the surface is taken as the straight segment joining them (exact on
+        // flat walls, unlike interpolating the range): in the frame of the lower ray, the hits
+        // are (r0, 0) and (r1 cos inc, r1 sin inc) and the query ray points at phi = f inc.
+        let frac = s - s.floor();
+        let (sp, cp) = (frac * inc).sin_cos();
+        let (si, ci) = inc.sin_cos();
+        let between = |r0: f64, r1: f64| {
+            let (dx, dy) = (r1 * ci - r0, r1 * si);
+            let den = cp * dy - sp * dx;
+            let t = (r0 * dy) / den;
+            if den.abs() > 1e-12 && t.is_finite() && t > 0.0 {
+                t
+            } else {
+                r0 + frac * (r1 - r0)
+            }
+        };
+        let mut sum = 0.0;
+        let mut count = 0usize;
+        for (i, a) in after.iter().enumerate() {
+            let Some(a) = a else { continue };
+            let j = i as f64 + s;
+            if j < 0.0 || j > (n - 1) as f64 {
+                continue;
+            }
+            // j >= 0: truncation is the floor (and needs no libm call).
+            let j0 = j as usize;
+            let j1 = (j0 + 1).min(n - 1);
+            let d = match (before[j0], before[j1]) {
+                (Some(b0), Some(b1)) => {
+                    if b0.open == b1.open && (b0.range - b1.range).abs() < SMOOTH_M {
+                        // Smooth stretch: interpolate below one ray.
+                        if a.open && b0.open {
+                            continue;
+                        }
+                        let b = if b0.open {
+                            b0.range
+                        } else {
+                            between(b0.range, b1.range)
+                        };
+                        (a.range - b).abs()
+                    } else {
+                        // A discontinuity between the two rays: the ray may match either side.
+                        let side = |b: Reading| {
+                            if a.open && b.open {
+                                0.0
+                            } else {
+                                (a.range - b.range).abs()
+                            }
+                        };
+                        side(b0).min(side(b1))
+                    }
+                }
+                (Some(b), None) | (None, Some(b)) => {
+                    if a.open && b.open {
+                        continue;
+                    }
+                    (a.range - b.range).abs()
+                }
+                _ => continue,
+            };
+            let d = d.min(clip);
+            sum += d * d;
+            count += 1;
+        }
+        if count == 0 {
+            (f64::INFINITY, 0)
+        } else {
+            (sum / count as f64, count)
+        }
+    }
+
+    #[test]
+    fn prepared_cost_equals_the_reference() {
+        // Ranges with smooth stretches, edges, max-range runs and error rays.
+        let g = ScanGeometry::paper();
+        let n = g.ray_count;
+        let mut state = 99u64;
+        let mut uniform = || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((state >> 11) as f64) / ((1u64 << 53) as f64)
+        };
+        let mut scan = |shift: f64| {
+            let ranges: Vec<f64> = (0..n)
+                .map(|i| {
+                    let x = i as f64 + shift;
+                    match (x / 40.0) as usize % 4 {
+                        0 => 1.0 + 0.002 * x,
+                        1 => 2.5 + 0.01 * (x * 0.1).sin(),
+                        2 => g.max_range_m,
+                        _ => 0.6 + 0.05 * ((x as usize % 7) as f64),
+                    }
+                })
+                .collect();
+            let mut s = Scan::from_ranges(&g, &ranges, 0.0);
+            for _ in 0..20 {
+                let k = (uniform() * n as f64) as usize;
+                s.status[k] = RayStatus::Error(1);
+                s.ranges_m[k] = f64::NAN;
+            }
+            s
+        };
+        let (before, after) = (scan(0.0), scan(7.3));
+        let (b, a) = (readings(&g, &before), readings(&g, &after));
+        let inc = g.increment_rad;
+        let prepared = pairs(&b, inc);
+        for k in -400..=400 {
+            let s = k as f64 * 0.05 + 0.3 * (k % 3) as f64;
+            let want = cost_reference(&b, &a, s, 0.3, inc);
+            let table = if s == s.floor() {
+                at_rays(&prepared, inc)
+            } else {
+                prepared.clone()
+            };
+            let got = cost(&table, &a, s, 0.3, inc);
+            assert_eq!(want.1, got.1, "{s}");
+            assert_eq!(want.0.to_bits(), got.0.to_bits(), "{s}");
+        }
+    }
 }
