@@ -158,7 +158,7 @@ impl OccupancyGrid {
     /// Global cell index of a world point.
     fn global(&self, p: WorldPoint) -> (i64, i64) {
         let r = self.params.resolution_m;
-        ((p.x_m() / r).floor() as i64, (p.y_m() / r).floor() as i64)
+        (floor_i64(p.x_m() / r), floor_i64(p.y_m() / r))
     }
 
     /// (col, row) of the cell holding `p`, if inside the grid.
@@ -324,14 +324,18 @@ impl OccupancyGrid {
         self.ensure(lo, hi);
         let free = self.params.free_log_odds;
         let res = self.params.resolution_m;
-        let mut path = Vec::new();
+        let m = self.params.clamp_log_odds;
+        let (col0, row0, width, height) = (self.col0, self.row0, self.width, self.height);
+        let cells = &mut self.cells;
         for (end, _) in &ends {
-            path.clear();
-            traverse(res, start, *end, &mut path);
             // Every cell but the last is seen through.
-            for &g in &path[..path.len().saturating_sub(1)] {
-                self.add(g, free);
-            }
+            traverse_before_end(res, start, *end, |g| {
+                let (c, r) = ((g.0 - col0) as usize, (g.1 - row0) as usize);
+                if c < width && r < height {
+                    let v = &mut cells[r * width + c];
+                    *v = (*v + free).clamp(-m, m);
+                }
+            });
         }
         // Hits after frees, so a grazing neighbour ray does not erase a wall cell.
         let hit = self.params.hit_log_odds;
@@ -420,7 +424,65 @@ impl OccupancyGrid {
     }
 }
 
-/// Global cells crossed by the segment `a -> b` in order (Amanatides-Woo), `b`'s cell last.
+/// `x.floor() as i64` without a libm call (the baseline x86-64 target has no rounding
+/// instruction); equal for every input, NaN and infinities included.
+fn floor_i64(x: f64) -> i64 {
+    let t = x as i64;
+    if t as f64 > x { t.saturating_sub(1) } else { t }
+}
+
+/// Calls `visit` on the global cells crossed by the segment `a -> b` in order
+/// (Amanatides-Woo), up to but excluding `b`'s cell.
+fn traverse_before_end(res: f64, a: WorldPoint, b: WorldPoint, mut visit: impl FnMut((i64, i64))) {
+    let (sx, sy, ex, ey) = (a.x_m(), a.y_m(), b.x_m(), b.y_m());
+    let (mut cx, mut cy) = (floor_i64(sx / res), floor_i64(sy / res));
+    let (tx, ty) = (floor_i64(ex / res), floor_i64(ey / res));
+    let (dx, dy) = (ex - sx, ey - sy);
+    let step_x = if dx > 0.0 { 1 } else { -1 };
+    let step_y = if dy > 0.0 { 1 } else { -1 };
+    let t_delta_x = if dx != 0.0 {
+        res / dx.abs()
+    } else {
+        f64::INFINITY
+    };
+    let t_delta_y = if dy != 0.0 {
+        res / dy.abs()
+    } else {
+        f64::INFINITY
+    };
+    let mut t_max_x = if dx > 0.0 {
+        ((cx + 1) as f64 * res - sx) / dx
+    } else if dx < 0.0 {
+        (cx as f64 * res - sx) / dx
+    } else {
+        f64::INFINITY
+    };
+    let mut t_max_y = if dy > 0.0 {
+        ((cy + 1) as f64 * res - sy) / dy
+    } else if dy < 0.0 {
+        (cy as f64 * res - sy) / dy
+    } else {
+        f64::INFINITY
+    };
+    let max_steps = (tx - cx).unsigned_abs() + (ty - cy).unsigned_abs() + 2;
+    for _ in 0..max_steps {
+        if cx == tx && cy == ty {
+            return;
+        }
+        visit((cx, cy));
+        if t_max_x < t_max_y {
+            cx += step_x;
+            t_max_x += t_delta_x;
+        } else {
+            cy += step_y;
+            t_max_y += t_delta_y;
+        }
+    }
+}
+
+/// Global cells crossed by the segment `a -> b` in order (Amanatides-Woo), `b`'s cell last:
+/// the collecting walk `traverse_before_end` replaced, kept as its reference.
+#[cfg(test)]
 fn traverse(res: f64, a: WorldPoint, b: WorldPoint, out: &mut Vec<(i64, i64)>) {
     let (sx, sy, ex, ey) = (a.x_m(), a.y_m(), b.x_m(), b.y_m());
     let (mut cx, mut cy) = ((sx / res).floor() as i64, (sy / res).floor() as i64);
@@ -469,5 +531,64 @@ fn traverse(res: f64, a: WorldPoint, b: WorldPoint, out: &mut Vec<(i64, i64)>) {
     // Rounding stopped short: make sure the end cell comes last.
     if out.last() != Some(&(tx, ty)) {
         out.push((tx, ty));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn floor_i64_matches_std() {
+        let xs = [
+            f64::NAN,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            -1e300,
+            1e300,
+            -2.5,
+            -2.0,
+            -1e-300,
+            -0.0,
+            0.0,
+            0.5,
+            1.0,
+            4.999_999_999_999_999,
+            (1u64 << 53) as f64 + 2.0,
+        ];
+        for x in xs {
+            assert_eq!(floor_i64(x), x.floor() as i64, "{x}");
+        }
+    }
+
+    #[test]
+    fn walk_equals_the_collected_path_but_its_end() {
+        let mut state = 7u64;
+        let mut uniform = || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((state >> 11) as f64) / ((1u64 << 53) as f64)
+        };
+        let mut cases: Vec<(WorldPoint, WorldPoint)> = (0..3000)
+            .map(|_| {
+                let a = WorldPoint::new(uniform() * 8.0 - 4.0, uniform() * 8.0 - 4.0);
+                let b = WorldPoint::new(uniform() * 8.0 - 4.0, uniform() * 8.0 - 4.0);
+                (a, b)
+            })
+            .collect();
+        // Axis-aligned, on cell borders, and zero length.
+        cases.push((WorldPoint::new(0.0, 0.0), WorldPoint::new(1.0, 0.0)));
+        cases.push((WorldPoint::new(0.05, 0.1), WorldPoint::new(0.05, -1.0)));
+        cases.push((WorldPoint::new(0.3, 0.3), WorldPoint::new(0.3, 0.3)));
+        cases.push((WorldPoint::new(-0.1, -0.1), WorldPoint::new(0.2, 0.2)));
+        for (a, b) in cases {
+            let mut want = Vec::new();
+            traverse(0.05, a, b, &mut want);
+            want.pop();
+            let mut got = Vec::new();
+            traverse_before_end(0.05, a, b, |g| got.push(g));
+            assert_eq!(got, want, "{a:?} -> {b:?}");
+        }
     }
 }
