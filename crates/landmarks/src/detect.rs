@@ -486,6 +486,29 @@ fn fit_line(points: &[RobotPoint]) -> Option<([f64; 2], [f64; 2], f64)> {
     Some(([cx, cy], d, (ss / n).sqrt()))
 }
 
+/// The squared cosine of the angle between the principal axes of two point sets (as
+/// [`fit_line`] fits them), from their scatter matrices without trigonometry: the axis of a
+/// set lies at half the angle of `(sxx - syy, 2 sxy)`, and `cos^2 t = (1 + cos 2t) / 2`.
+/// `None` when an axis is undefined.
+fn cos2_between_axes(a: &[RobotPoint], b: &[RobotPoint]) -> Option<f64> {
+    let doubled = |points: &[RobotPoint]| {
+        let n = points.len() as f64;
+        let cx = points.iter().map(|p| p.x_m()).sum::<f64>() / n;
+        let cy = points.iter().map(|p| p.y_m()).sum::<f64>() / n;
+        let (mut sxx, mut syy, mut sxy) = (0.0, 0.0, 0.0);
+        for p in points {
+            let (dx, dy) = (p.x_m() - cx, p.y_m() - cy);
+            sxx += dx * dx;
+            syy += dy * dy;
+            sxy += dx * dy;
+        }
+        [sxx - syy, 2.0 * sxy]
+    };
+    let (u, v) = (doubled(a), doubled(b));
+    let cos_2t = (u[0] * v[0] + u[1] * v[1]) / (u[0].hypot(u[1]) * v[0].hypot(v[1]));
+    cos_2t.is_finite().then_some(0.5 * (1.0 + cos_2t))
+}
+
 /// Range at which the ray at `bearing` meets the line (centroid c, direction d), if ahead.
 fn line_range_on_ray(c: [f64; 2], d: [f64; 2], bearing: f64) -> Option<f64> {
     let u = [bearing.cos(), bearing.sin()];
@@ -602,6 +625,11 @@ fn score(l: &Landmark, params: &DetectParams) -> f64 {
 fn corners(geometry: &ScanGeometry, seg: &[Ray], params: &DetectParams, out: &mut Vec<Landmark>) {
     // (pos, turn angle, refined point)
     let mut cands: Vec<(usize, f64, RobotPoint)> = Vec::new();
+    // Squared cosine of the smallest corner turn, with a margin for rounding: arms whose
+    // fitted lines' angle has a larger squared cosine turn less than the smallest corner.
+    let a = params.corner_min_angle_rad;
+    let straight_cos2 =
+        (a > 0.0 && a < std::f64::consts::FRAC_PI_2).then(|| a.cos().powi(2) + 1e-9);
     // Each arm with the corner point first.
     let (mut lo, mut hi) = (Vec::new(), Vec::new());
     for pos in 0..seg.len() {
@@ -625,6 +653,12 @@ fn corners(geometry: &ScanGeometry, seg: &[Ray], params: &DetectParams, out: &mu
         hi.push(p);
         arm_into(seg, pos, 1, params, &mut hi);
         if !long_enough(&hi) {
+            continue;
+        }
+        // Most hits lie on straight walls: rule them out without trigonometry.
+        if let Some(c) = straight_cos2
+            && cos2_between_axes(&lo, &hi).is_some_and(|x| x > c)
+        {
             continue;
         }
         let (Some((c1, d1, e1)), Some((c2, d2, e2))) = (fit_line(&lo), fit_line(&hi)) else {
@@ -690,4 +724,42 @@ fn intersect(c1: [f64; 2], d1: [f64; 2], c2: [f64; 2], d2: [f64; 2]) -> Option<R
     }
     let t = ((c2[0] - c1[0]) * d2[1] - (c2[1] - c1[1]) * d2[0]) / den;
     Some(RobotPoint::new(c1[0] + t * d1[0], c1[1] + t * d1[1]))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `k` points from `from` along `angle_deg`, 1 cm apart.
+    fn arm_at(from: [f64; 2], angle_deg: f64, k: usize) -> Vec<RobotPoint> {
+        let (s, c) = angle_deg.to_radians().sin_cos();
+        (0..k)
+            .map(|i| RobotPoint::new(from[0] + 0.01 * i as f64 * c, from[1] + 0.01 * i as f64 * s))
+            .collect()
+    }
+
+    #[test]
+    fn axes_cosine_without_trigonometry() {
+        // Two arms from one point at known angles: cos^2 of the angle between them.
+        for (deg, want) in [
+            (0.0, 1.0),
+            (30.0, 0.75),
+            (45.0, 0.5),
+            (90.0, 0.0),
+            (150.0, 0.75),
+        ] {
+            let a = arm_at([1.0, 0.5], 10.0, 12);
+            let b = arm_at([1.0, 0.5], 10.0 + deg, 9);
+            let got = cos2_between_axes(&a, &b).unwrap();
+            assert!((got - want).abs() < 1e-12, "{deg}: {got}");
+            // The same as the fitted lines' directions give.
+            let (_, d1, _) = fit_line(&a).unwrap();
+            let (_, d2, _) = fit_line(&b).unwrap();
+            let dot = d1[0] * d2[0] + d1[1] * d2[1];
+            assert!((got - dot * dot).abs() < 1e-12, "{deg}");
+        }
+        // A single repeated point has no axis.
+        let p = vec![RobotPoint::new(1.0, 1.0); 4];
+        assert_eq!(cos2_between_axes(&p, &arm_at([0.0, 0.0], 0.0, 5)), None);
+    }
 }
