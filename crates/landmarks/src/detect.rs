@@ -231,6 +231,22 @@ struct Ray {
     pt: RobotPoint,
 }
 
+/// `dist(a, b) > limit`, with the square root only when the squares are too close to tell.
+fn beyond(a: &RobotPoint, b: &RobotPoint, limit: f64) -> bool {
+    let (dx, dy) = (b.x_m() - a.x_m(), b.y_m() - a.y_m());
+    let d2 = dx * dx + dy * dy;
+    let l2 = limit * limit;
+    if limit.is_nan() || limit < 0.0 {
+        d2.sqrt() > limit
+    } else if d2 > l2 * (1.0 + 1e-9) {
+        true
+    } else if d2 < l2 * (1.0 - 1e-9) {
+        false
+    } else {
+        d2.sqrt() > limit
+    }
+}
+
 /// Distance between two points (as `RobotPoint::distance_m`, inlined).
 fn dist(a: &RobotPoint, b: &RobotPoint) -> f64 {
     let (dx, dy) = (b.x_m() - a.x_m(), b.y_m() - a.y_m());
@@ -448,7 +464,7 @@ fn arm_into(
         if (r - prev).abs() > params.occlusion_jump_m {
             break;
         }
-        if dist(&origin, &ray.pt) > params.arm_m {
+        if beyond(&origin, &ray.pt, params.arm_m) {
             break;
         }
         out.push(ray.pt);
@@ -505,7 +521,8 @@ fn cos2_between_axes(a: &[RobotPoint], b: &[RobotPoint]) -> Option<f64> {
         [sxx - syy, 2.0 * sxy]
     };
     let (u, v) = (doubled(a), doubled(b));
-    let cos_2t = (u[0] * v[0] + u[1] * v[1]) / (u[0].hypot(u[1]) * v[0].hypot(v[1]));
+    let norms2 = (u[0] * u[0] + u[1] * u[1]) * (v[0] * v[0] + v[1] * v[1]);
+    let cos_2t = (u[0] * v[0] + u[1] * v[1]) / norms2.sqrt();
     cos_2t.is_finite().then_some(0.5 * (1.0 + cos_2t))
 }
 
@@ -736,6 +753,36 @@ mod tests {
         (0..k)
             .map(|i| RobotPoint::new(from[0] + 0.01 * i as f64 * c, from[1] + 0.01 * i as f64 * s))
             .collect()
+    }
+
+    #[test]
+    fn beyond_is_the_distance_test() {
+        let o = RobotPoint::new(0.5, -0.25);
+        for (x, y) in [
+            (0.5, -0.05),
+            (0.5 + 0.2, -0.25),
+            (0.62, -0.09),
+            (0.3, -0.25),
+            (2.0, 1.0),
+        ] {
+            let p = RobotPoint::new(x, y);
+            for limit in [
+                -1.0,
+                0.0,
+                0.1,
+                0.2,
+                0.2 + 1e-12,
+                0.25,
+                f64::NAN,
+                f64::INFINITY,
+            ] {
+                assert_eq!(
+                    beyond(&o, &p, limit),
+                    dist(&o, &p) > limit,
+                    "{x} {y} {limit}"
+                );
+            }
+        }
     }
 
     #[test]
