@@ -89,7 +89,7 @@ struct Oriented {
 }
 
 /// Side of a cell of the nearest-neighbour index, metres.
-const CELL_M: f64 = 0.05;
+const CELL_M: f64 = 0.04;
 
 /// Radius of the first, narrow nearest-neighbour search, metres.
 const NEAR_M: f64 = 0.02;
@@ -192,31 +192,34 @@ impl MatchTarget {
         self.width = floor_nonneg((hi[0] - lo[0]) / CELL_M) + 1;
         self.height = floor_nonneg((hi[1] - lo[1]) / CELL_M) + 1;
         let cells = self.width * self.height;
-        let mut counts = vec![0u32; cells + 1];
+        // Counting sort: points per cell, then each cell's end, then filled from the back.
+        let mut starts = vec![0u32; cells + 1];
         let cell_of: Vec<Option<usize>> = self
             .points
             .iter()
             .map(|o| is_finite2(o.p).then(|| self.cell(o.p)))
             .collect();
         for &c in cell_of.iter().flatten() {
-            counts[c + 1] += 1;
+            starts[c] += 1;
         }
-        for i in 0..cells {
-            counts[i + 1] += counts[i];
+        let mut end = 0u32;
+        for v in &mut starts {
+            end += *v;
+            *v = end;
         }
-        let mut fill = counts.clone();
         let placeholder = Oriented {
             p: [0.0; 2],
             n: [0.0; 2],
         };
-        self.sorted = vec![placeholder; counts[cells] as usize];
-        for (o, c) in self.points.iter().zip(&cell_of) {
+        self.sorted = vec![placeholder; end as usize];
+        for (o, c) in self.points.iter().zip(&cell_of).rev() {
             if let Some(c) = *c {
-                self.sorted[fill[c] as usize] = *o;
-                fill[c] += 1;
+                starts[c] -= 1;
+                self.sorted[starts[c] as usize] = *o;
             }
         }
-        self.starts = counts;
+        // Now `starts[c]` is where cell c begins and `starts[cells]` the total.
+        self.starts = starts;
     }
 
     fn cell(&self, p: [f64; 2]) -> usize {
@@ -225,30 +228,46 @@ impl MatchTarget {
         cy * self.width + cx
     }
 
-    /// The reference point nearest `q` within `gate` whose normal agrees with `n`.
+    /// The reference point nearest `q` within `gate` whose normal agrees with `n`, as an
+    /// index into `sorted`, given the index of a point `hint` that is probably near `q` (the
+    /// match of the previous iteration).
     ///
-    /// First searches the cells within `min(gate, NEAR_M)` of `q`: a point found there
-    /// nearer than that radius is the nearest overall (every point outside those cells lies
-    /// farther away). Otherwise searches every cell within `gate`.
-    fn nearest(&self, q: [f64; 2], n: [f64; 2], gate: f64, min_cos: f64) -> Option<&Oriented> {
+    /// First searches the cells within `min(gate, NEAR_M, distance to the hint)` of `q`: a
+    /// point found there nearer than that radius is the nearest overall (every point
+    /// outside those cells lies farther away). Otherwise searches every cell within `gate`.
+    fn nearest_hinted(
+        &self,
+        q: [f64; 2],
+        n: [f64; 2],
+        gate: f64,
+        min_cos: f64,
+        hint: Option<usize>,
+    ) -> Option<usize> {
         if self.width == 0 || !is_finite2(q) || gate.is_nan() || gate < 0.0 {
             return None;
         }
-        let near = gate.min(NEAR_M);
-        if let Some((d2, o)) = self.nearest_in(q, n, near, gate, min_cos) {
+        let mut near = gate.min(NEAR_M);
+        if let Some(o) = hint.and_then(|k| self.sorted.get(k)) {
+            let d2 = (o.p[0] - q[0]).powi(2) + (o.p[1] - q[1]).powi(2);
+            if d2 <= gate * gate && o.n[0] * n[0] + o.n[1] * n[1] >= min_cos {
+                // The hint lies within this radius with room for the margin below.
+                near = near.min(d2.sqrt() + 2e-9);
+            }
+        }
+        if let Some((d2, k)) = self.nearest_in(q, n, near, gate, min_cos) {
             // Margin for the rounding of cell assignment.
             let sure = (near - 1e-9).max(0.0);
             if d2 < sure * sure || near >= gate {
-                return Some(o);
+                return Some(k);
             }
         } else if near >= gate {
             return None;
         }
-        self.nearest_in(q, n, gate, gate, min_cos).map(|(_, o)| o)
+        self.nearest_in(q, n, gate, gate, min_cos).map(|(_, k)| k)
     }
 
-    /// The nearest point within `gate` (squared distance and point) among the cells within
-    /// `reach` of `q`.
+    /// The nearest point within `gate` (squared distance and index into `sorted`) among the
+    /// cells within `reach` of `q`.
     fn nearest_in(
         &self,
         q: [f64; 2],
@@ -256,7 +275,7 @@ impl MatchTarget {
         reach: f64,
         gate: f64,
         min_cos: f64,
-    ) -> Option<(f64, &Oriented)> {
+    ) -> Option<(f64, usize)> {
         let fx = (q[0] - self.origin[0]) / CELL_M;
         let fy = (q[1] - self.origin[1]) / CELL_M;
         let r = reach / CELL_M;
@@ -274,18 +293,19 @@ impl MatchTarget {
         let (x0, x1) = (x0 as usize, x1.min(wmax) as usize);
         let (y0, y1) = (y0 as usize, y1.min(hmax) as usize);
         let g2 = gate * gate;
-        let mut best: Option<(f64, &Oriented)> = None;
+        let mut best: Option<(f64, usize)> = None;
         for cy in y0..=y1 {
             let row = cy * self.width;
             // The cells of one row are contiguous in `sorted`.
-            let span = self.starts[row + x0] as usize..self.starts[row + x1 + 1] as usize;
-            for o in &self.sorted[span] {
+            let first = self.starts[row + x0] as usize;
+            let span = first..self.starts[row + x1 + 1] as usize;
+            for (k, o) in self.sorted[span].iter().enumerate() {
                 let d2 = (o.p[0] - q[0]).powi(2) + (o.p[1] - q[1]).powi(2);
                 if d2 > g2 || o.n[0] * n[0] + o.n[1] * n[1] < min_cos {
                     continue;
                 }
                 if best.is_none_or(|(b, _)| d2 < b) {
-                    best = Some((d2, o));
+                    best = Some((d2, first + k));
                 }
             }
         }
@@ -319,6 +339,8 @@ impl MatchTarget {
         let mut iterations = 0;
         let mut last = None;
         let mut prev_step = None;
+        // Each point's match in the previous iteration (a hint for the next search).
+        let mut matched: Vec<Option<usize>> = vec![None; cur.len()];
         for it in 0..params.max_iterations.max(1) {
             iterations = it + 1;
             let (s, c) = x[2].sin_cos();
@@ -326,13 +348,14 @@ impl MatchTarget {
             let mut h_data = [[0.0f64; 3]; 3];
             let mut g = [0.0f64; 3];
             let (mut sq, mut pairs) = (0.0, 0usize);
-            for o in &cur {
+            for (o, hint) in cur.iter().zip(matched.iter_mut()) {
                 let q = [
                     x[0] + c * o.p[0] - s * o.p[1],
                     x[1] + s * o.p[0] + c * o.p[1],
                 ];
                 let n_cur = [c * o.n[0] - s * o.n[1], s * o.n[0] + c * o.n[1]];
-                let Some(m) = self.nearest(q, n_cur, gate, min_cos) else {
+                *hint = self.nearest_hinted(q, n_cur, gate, min_cos, *hint);
+                let Some(m) = hint.map(|k| &self.sorted[k]) else {
                     continue;
                 };
                 let r = m.n[0] * (q[0] - m.p[0]) + m.n[1] * (q[1] - m.p[1]);
@@ -742,14 +765,19 @@ mod tests {
                         want = Some((d2, o));
                     }
                 }
-                assert_eq!(
-                    t.nearest(q, n, gate, min_cos),
-                    want.map(|w| w.1),
-                    "{q:?} {gate}"
-                );
+                // Without a hint, with a random one and with the answer as the hint.
+                let some = Some((uniform() * t.len() as f64) as usize);
+                let right = t.nearest_hinted(q, n, gate, min_cos, None);
+                for hint in [None, some, right] {
+                    let got = t.nearest_hinted(q, n, gate, min_cos, hint);
+                    assert_eq!(got.map(|k| &t.sorted[k]), want.map(|w| w.1), "{q:?} {gate}");
+                }
             }
         }
-        assert_eq!(t.nearest([f64::NAN, 0.0], [1.0, 0.0], 0.3, 0.5), None);
+        assert_eq!(
+            t.nearest_hinted([f64::NAN, 0.0], [1.0, 0.0], 0.3, 0.5, Some(0)),
+            None
+        );
     }
 
     #[test]
