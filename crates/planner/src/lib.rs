@@ -306,14 +306,30 @@ impl Planner {
             self.candidates.push((score, i, travel));
         }
         // Best score first; ties go to the ray nearer the target's bearing, then the longer leg.
-        self.candidates.sort_by(|a, b| {
+        let order = |a: &(f64, usize, f64), b: &(f64, usize, f64)| {
             a.0.total_cmp(&b.0).then_with(|| {
                 tie_key(geometry, a.1, a.2, t_bearing).cmp(&tie_key(geometry, b.1, b.2, t_bearing))
             })
-        });
+        };
         // The scan cannot see obstacles just outside its field of view: a leg is also cut
         // where it enters an obstacle remembered from earlier scans.
         let min_travel = self.params.min_travel_m;
+        // Usually the best candidate passes: try it (the first of equal ones, as a stable sort
+        // puts first) before sorting them all.
+        let best = self.candidates.iter().copied().min_by(order);
+        if let Some((_, i, travel)) = best {
+            let travel = self.memory_cap_m(pose, geometry.bearing_rad(i), travel);
+            if travel >= min_travel && travel > 0.0 {
+                self.no_safe_tries = 0;
+                return Plan::Go {
+                    ray_index: i,
+                    alpha_rad: normalize_angle_rad(geometry.bearing_rad(i)),
+                    travel_m: travel,
+                    target_in_view: false,
+                };
+            }
+        }
+        self.candidates.sort_by(order);
         for k in 0..self.candidates.len() {
             let (_, i, travel) = self.candidates[k];
             let travel = self.memory_cap_m(pose, geometry.bearing_rad(i), travel);

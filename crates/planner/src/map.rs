@@ -174,8 +174,10 @@ impl ObstacleMemory {
     }
 
     fn cell_of(&self, p: WorldPoint) -> Option<usize> {
-        let fx = ((p.x_m() - self.origin.0) / self.resolution_m).floor();
-        let fy = ((p.y_m() - self.origin.1) / self.resolution_m).floor();
+        // Compared before flooring: floor(x) >= 0 iff x >= 0 and floor(x) < w iff x < w for a
+        // whole w, and for x >= 0 truncation is the floor (no libm call).
+        let fx = (p.x_m() - self.origin.0) / self.resolution_m;
+        let fy = (p.y_m() - self.origin.1) / self.resolution_m;
         if fx >= 0.0 && fy >= 0.0 && fx < self.width as f64 && fy < self.height as f64 {
             Some(fy as usize * self.width + fx as usize)
         } else {
