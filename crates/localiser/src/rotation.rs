@@ -323,11 +323,21 @@ pub fn measure_rotation_with(
     if side.is_finite() && side < params.min_contrast * best.0 + 1e-9 {
         return None;
     }
-    // Sub-ray refinement on a fine grid, then a parabola through the best grid point.
+    // Sub-ray refinement: a 0.25-ray grid within +-1 ray, a 0.05-ray grid within +-0.25 ray
+    // of its best, then a parabola through the best fine point.
+    let coarse_step = 0.25;
+    let mut coarse = (f64::INFINITY, s0);
+    for k in -4..=4 {
+        let s = s0 + k as f64 * coarse_step;
+        let (c, _) = eval(s);
+        if c < coarse.0 {
+            coarse = (c, s);
+        }
+    }
     let step = 0.05;
-    let mut fine = (f64::INFINITY, s0);
-    for k in -20..=20 {
-        let s = s0 + k as f64 * step;
+    let mut fine = coarse;
+    for k in (-5..=5).filter(|&k| k != 0) {
+        let s = coarse.1 + k as f64 * step;
         let (c, _) = eval(s);
         if c < fine.0 {
             fine = (c, s);
