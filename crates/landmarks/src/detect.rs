@@ -292,6 +292,7 @@ fn segments(geometry: &ScanGeometry, scan: &Scan, max_gap: usize) -> Vec<Vec<Ray
         .min(scan.status.len());
     let mut out = Vec::new();
     let mut current: Vec<Ray> = Vec::new();
+    let dirs = geometry.directions();
     let mut gap = 0usize;
     for i in 0..n {
         let r = scan.ranges_m[i];
@@ -299,7 +300,7 @@ fn segments(geometry: &ScanGeometry, scan: &Scan, max_gap: usize) -> Vec<Vec<Ray
             RayStatus::Hit if r.is_finite() && r > 0.0 => Ray {
                 index: i,
                 hit: Some(r),
-                pt: geometry.robot_point(i, r),
+                pt: RobotPoint::new(r * dirs[i][0], r * dirs[i][1]),
             },
             RayStatus::MaxRange => Ray {
                 index: i,

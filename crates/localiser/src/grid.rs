@@ -3,7 +3,7 @@
 use std::path::{Path, PathBuf};
 
 use image::{ExtendedColorType, ImageEncoder};
-use scan_types::{Pose2, RayStatus, Scan, ScanGeometry, WorldPoint};
+use scan_types::{Pose2, RayStatus, RobotPoint, Scan, ScanGeometry, WorldPoint};
 
 use crate::{LocaliserError, io::write_atomic};
 
@@ -284,6 +284,7 @@ impl OccupancyGrid {
             .min(scan.status.len());
         let start = pose.position();
         let mut ends: Vec<(WorldPoint, bool)> = Vec::with_capacity(n);
+        let dirs = geometry.directions();
         for i in 0..n {
             let r = scan.ranges_m[i];
             let hit = match scan.status[i] {
@@ -292,7 +293,9 @@ impl OccupancyGrid {
                 _ => continue,
             };
             let range = if hit { r } else { geometry.max_range_m };
-            ends.push((pose.transform_point(geometry.robot_point(i, range)), hit));
+            let d = dirs[i];
+            let p = RobotPoint::new(range * d[0], range * d[1]);
+            ends.push((pose.transform_point(p), hit));
         }
         if ends.is_empty() {
             return false;

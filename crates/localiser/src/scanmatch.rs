@@ -502,11 +502,12 @@ fn solve3(a: &[[f64; 3]; 3], b: &[f64; 3]) -> Option<[f64; 3]> {
 /// same surface; hits without a clear line through their neighbours are left out.
 fn oriented_hits(geometry: &ScanGeometry, scan: &Scan, params: &MatchParams) -> Vec<Oriented> {
     let n = geometry.ray_count.min(scan.len());
+    let dirs = geometry.directions();
     let pts: Vec<Option<RobotPoint>> = (0..n)
         .map(|i| {
             scan.hit_range_m(i)
                 .filter(|r| r.is_finite() && *r > 0.0)
-                .map(|r| geometry.robot_point(i, r))
+                .map(|r| RobotPoint::new(r * dirs[i][0], r * dirs[i][1]))
         })
         .collect();
     let k = params.normal_rays.max(1);

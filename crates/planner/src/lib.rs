@@ -42,7 +42,9 @@ mod map;
 pub use error::PlannerError;
 pub use map::ObstacleMemory;
 
-use scan_types::{Pose2, Scan, ScanGeometry, WorldPoint, angle_diff_rad, normalize_angle_rad};
+use scan_types::{
+    Pose2, RobotPoint, Scan, ScanGeometry, WorldPoint, angle_diff_rad, normalize_angle_rad,
+};
 
 /// How the planner ranks the safe rays.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -224,10 +226,11 @@ impl Planner {
     pub fn add_scan(&mut self, pose: &Pose2, geometry: &ScanGeometry, scan: &Scan) {
         self.memory.ensure_contains(pose.position());
         let n = geometry.ray_count.min(scan.len());
+        let dirs = geometry.directions();
         for i in 0..n {
             if let Some(r) = scan.hit_range_m(i).filter(|r| r.is_finite() && *r >= 0.0) {
                 self.memory
-                    .add_hit(pose.transform_point(geometry.robot_point(i, r)));
+                    .add_hit(pose.transform_point(RobotPoint::new(r * dirs[i][0], r * dirs[i][1])));
             }
         }
     }
@@ -295,9 +298,11 @@ impl Planner {
             }
         }
         self.candidates.clear();
+        let dirs = geometry.directions();
         for i in 0..n {
             let Some(travel) = leg(i) else { continue };
-            let end = pose.transform_point(geometry.robot_point(i, travel));
+            let end =
+                pose.transform_point(RobotPoint::new(travel * dirs[i][0], travel * dirs[i][1]));
             let score = if map_path {
                 self.memory.path_length_m(end).unwrap_or(f64::INFINITY)
             } else {

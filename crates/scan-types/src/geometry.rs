@@ -1,6 +1,17 @@
 //! Scan geometry: where each ray of a scan points and what ranges it can report.
 
+use std::cell::RefCell;
+use std::rc::Rc;
+
 use crate::{RobotPoint, ScanTypesError};
+
+/// A geometry's ray directions: first bearing, increment, ray count, `[cos, sin]` per ray.
+type Directions = (f64, f64, usize, Rc<[[f64; 2]]>);
+
+thread_local! {
+    /// The ray directions of the last geometry asked on this thread.
+    static DIRECTIONS: RefCell<Option<Directions>> = const { RefCell::new(None) };
+}
 
 /// The fixed geometry of a scan: bearings of its rays and its range limits.
 ///
@@ -148,6 +159,29 @@ impl ScanGeometry {
         let b = self.bearing_rad(index);
         RobotPoint::new(range_m * b.cos(), range_m * b.sin())
     }
+
+    /// `[cos, sin]` of every ray's bearing: `range * d[0], range * d[1]` is exactly
+    /// [`Self::robot_point`]. Computed once per thread for the last geometry asked, so the
+    /// points of each scan need no trigonometry.
+    pub fn directions(&self) -> Rc<[[f64; 2]]> {
+        let key = (self.first_bearing_rad, self.increment_rad, self.ray_count);
+        DIRECTIONS.with(|cell| {
+            let mut cached = cell.borrow_mut();
+            if let Some((f, i, n, d)) = cached.as_ref()
+                && (*f, *i, *n) == key
+            {
+                return Rc::clone(d);
+            }
+            let d: Rc<[[f64; 2]]> = (0..self.ray_count)
+                .map(|k| {
+                    let b = self.bearing_rad(k);
+                    [b.cos(), b.sin()]
+                })
+                .collect();
+            *cached = Some((key.0, key.1, key.2, Rc::clone(&d)));
+            d
+        })
+    }
 }
 
 #[cfg(test)]
@@ -188,6 +222,22 @@ mod tests {
         assert_abs_diff_eq!(g.bearing_rad(340), 0.0, epsilon = 1e-12);
         assert_abs_diff_eq!(g.first_bearing_rad, -2.0862, epsilon = 1e-4);
         assert_abs_diff_eq!(g.last_bearing_rad(), 2.0923, epsilon = 1e-4);
+    }
+
+    #[test]
+    fn directions_give_robot_points() {
+        let a = ScanGeometry::paper();
+        let b = ScanGeometry::centred(5, PI, 0.0, 10.0).unwrap();
+        // Alternate geometries: the cache follows the one asked.
+        for g in [a, b, a] {
+            let d = g.directions();
+            assert_eq!(d.len(), g.ray_count);
+            for (i, dir) in d.iter().enumerate() {
+                let p = g.robot_point(i, 2.5);
+                assert_eq!(RobotPoint::new(2.5 * dir[0], 2.5 * dir[1]), p);
+            }
+        }
+        assert_abs_diff_eq!(b.directions()[4][1], 1.0, epsilon = 1e-12);
     }
 
     #[test]
