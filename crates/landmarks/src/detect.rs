@@ -506,22 +506,27 @@ fn fit_line(points: &[RobotPoint]) -> Option<([f64; 2], [f64; 2], f64)> {
 /// The squared cosine of the angle between the principal axes of two point sets (as
 /// [`fit_line`] fits them), from their scatter matrices without trigonometry: the axis of a
 /// set lies at half the angle of `(sxx - syy, 2 sxy)`, and `cos^2 t = (1 + cos 2t) / 2`.
-/// `None` when an axis is undefined.
+/// Accurate to about 1e-8; `None` when an axis is poorly defined (a round blob of points).
 fn cos2_between_axes(a: &[RobotPoint], b: &[RobotPoint]) -> Option<f64> {
+    // One pass over the points relative to the first (a few decimetres away at most).
     let doubled = |points: &[RobotPoint]| {
-        let n = points.len() as f64;
-        let cx = points.iter().map(|p| p.x_m()).sum::<f64>() / n;
-        let cy = points.iter().map(|p| p.y_m()).sum::<f64>() / n;
-        let (mut sxx, mut syy, mut sxy) = (0.0, 0.0, 0.0);
+        let o = points.first()?;
+        let (mut sx, mut sy, mut sxx, mut syy, mut sxy) = (0.0, 0.0, 0.0, 0.0, 0.0);
         for p in points {
-            let (dx, dy) = (p.x_m() - cx, p.y_m() - cy);
+            let (dx, dy) = (p.x_m() - o.x_m(), p.y_m() - o.y_m());
+            sx += dx;
+            sy += dy;
             sxx += dx * dx;
             syy += dy * dy;
             sxy += dx * dy;
         }
-        [sxx - syy, 2.0 * sxy]
+        let n = points.len() as f64;
+        let (cxx, cyy, cxy) = (sxx - sx * sx / n, syy - sy * sy / n, sxy - sx * sy / n);
+        let u = [cxx - cyy, 2.0 * cxy];
+        // Rounding leaves u within about 1e-15 of the trace: trust it only well above that.
+        (u[0].hypot(u[1]) > 1e-6 * (cxx + cyy)).then_some(u)
     };
-    let (u, v) = (doubled(a), doubled(b));
+    let (u, v) = (doubled(a)?, doubled(b)?);
     let norms2 = (u[0] * u[0] + u[1] * u[1]) * (v[0] * v[0] + v[1] * v[1]);
     let cos_2t = (u[0] * v[0] + u[1] * v[1]) / norms2.sqrt();
     cos_2t.is_finite().then_some(0.5 * (1.0 + cos_2t))
@@ -647,7 +652,7 @@ fn corners(geometry: &ScanGeometry, seg: &[Ray], params: &DetectParams, out: &mu
     // fitted lines' angle has a larger squared cosine turn less than the smallest corner.
     let a = params.corner_min_angle_rad;
     let straight_cos2 =
-        (a > 0.0 && a < std::f64::consts::FRAC_PI_2).then(|| a.cos().powi(2) + 1e-9);
+        (a > 0.0 && a < std::f64::consts::FRAC_PI_2).then(|| a.cos().powi(2) + 1e-7);
     // Each arm with the corner point first.
     let (mut lo, mut hi) = (Vec::new(), Vec::new());
     for pos in 0..seg.len() {
@@ -806,8 +811,14 @@ mod tests {
             let dot = d1[0] * d2[0] + d1[1] * d2[1];
             assert!((got - dot * dot).abs() < 1e-12, "{deg}");
         }
-        // A single repeated point has no axis.
+        // A single repeated point, or a round blob, has no axis.
         let p = vec![RobotPoint::new(1.0, 1.0); 4];
         assert_eq!(cos2_between_axes(&p, &arm_at([0.0, 0.0], 0.0, 5)), None);
+        let square =
+            [(0.0, 0.0), (0.1, 0.0), (0.1, 0.1), (0.0, 0.1)].map(|(x, y)| RobotPoint::new(x, y));
+        assert_eq!(
+            cos2_between_axes(&square, &arm_at([0.0, 0.0], 0.0, 5)),
+            None
+        );
     }
 }
