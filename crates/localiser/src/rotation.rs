@@ -206,7 +206,16 @@ fn at_rays(pairs: &[Pair], inc: f64) -> Vec<Pair> {
 
 /// Mean clipped squared difference and pair count at fractional shift `s` (rays), with
 /// `before` prepared by [`pairs`] (or by [`at_rays`] when `s` is a whole number).
-fn cost(before: &[Pair], after: &[Option<Reading>], s: f64, clip: f64, inc: f64) -> (f64, usize) {
+///
+/// Only every `every`-th ray of `after` counts (1: all).
+fn cost(
+    before: &[Pair],
+    after: &[Option<Reading>],
+    s: f64,
+    clip: f64,
+    inc: f64,
+    every: usize,
+) -> (f64, usize) {
     let n = before.len();
     // Between two hits the surface is taken as the straight segment joining them (exact on
     // flat walls, unlike interpolating the range): in the frame of the lower ray, the hits
@@ -215,7 +224,7 @@ fn cost(before: &[Pair], after: &[Option<Reading>], s: f64, clip: f64, inc: f64)
     let (sp, cp) = (frac * inc).sin_cos();
     let mut sum = 0.0;
     let mut count = 0usize;
-    for (i, a) in after.iter().enumerate() {
+    for (i, a) in after.iter().enumerate().step_by(every.max(1)) {
         let Some(a) = a else { continue };
         let j = i as f64 + s;
         if j < 0.0 || j > (n - 1) as f64 {
@@ -298,20 +307,32 @@ pub fn measure_rotation_with(
     let whole = at_rays(&b, inc);
     let eval = |s: f64| {
         let table = if s == s.floor() { &whole } else { &b };
-        let (c, k) = cost(table, &a, s, clip, inc);
+        let (c, k) = cost(table, &a, s, clip, inc, 1);
         if k >= params.min_pairs {
             (c, k)
         } else {
             (f64::INFINITY, k)
         }
     };
-    // Integer search.
+    // Integer search: every shift ranked on every second ray, the best three on all rays.
     let base = centre.round() as i64;
+    let mut ranked: Vec<(f64, i64)> = (-half..=half)
+        .map(|k| {
+            let (c, pairs) = cost(&whole, &a, (base + k) as f64, clip, inc, 2);
+            let c = if 2 * pairs >= params.min_pairs {
+                c
+            } else {
+                f64::INFINITY
+            };
+            (c, base + k)
+        })
+        .collect();
+    ranked.sort_by(|x, y| x.0.total_cmp(&y.0));
     let mut best = (f64::INFINITY, 0i64);
-    for k in -half..=half {
-        let (c, _) = eval((base + k) as f64);
+    for &(_, shift) in ranked.iter().take(3).filter(|r| r.0.is_finite()) {
+        let (c, _) = eval(shift as f64);
         if c < best.0 {
-            best = (c, base + k);
+            best = (c, shift);
         }
     }
     if !best.0.is_finite() {
@@ -494,7 +515,7 @@ mod tests {
             } else {
                 prepared.clone()
             };
-            let got = cost(&table, &a, s, 0.3, inc);
+            let got = cost(&table, &a, s, 0.3, inc, 1);
             assert_eq!(want.1, got.1, "{s}");
             assert_eq!(want.0.to_bits(), got.0.to_bits(), "{s}");
         }
