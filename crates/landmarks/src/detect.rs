@@ -524,7 +524,8 @@ fn cos2_between_axes(a: &[RobotPoint], b: &[RobotPoint]) -> Option<f64> {
         let (cxx, cyy, cxy) = (sxx - sx * sx / n, syy - sy * sy / n, sxy - sx * sy / n);
         let u = [cxx - cyy, 2.0 * cxy];
         // Rounding leaves u within about 1e-15 of the trace: trust it only well above that.
-        (u[0].hypot(u[1]) > 1e-6 * (cxx + cyy)).then_some(u)
+        let tolerance = 1e-6 * (cxx + cyy);
+        (u[0] * u[0] + u[1] * u[1] > tolerance * tolerance).then_some(u)
     };
     let (u, v) = (doubled(a)?, doubled(b)?);
     let norms2 = (u[0] * u[0] + u[1] * u[1]) * (v[0] * v[0] + v[1] * v[1]);

@@ -352,8 +352,13 @@ impl ObstacleMemory {
                 if self.field[k] == UNREACHED {
                     continue;
                 }
+                let along = self.field[k] as f64 * to_m;
+                // Adding a distance cannot bring it below the best so far.
+                if best.is_some_and(|b| along >= b) {
+                    continue;
+                }
                 let (cx, cy) = self.centre_of(k);
-                let v = self.field[k] as f64 * to_m + (cx - p.x_m()).hypot(cy - p.y_m());
+                let v = along + (cx - p.x_m()).hypot(cy - p.y_m());
                 best = Some(best.map_or(v, |b: f64| b.min(v)));
             }
         }
