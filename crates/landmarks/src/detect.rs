@@ -234,7 +234,11 @@ struct Ray {
 /// `dist(a, b) > limit`, with the square root only when the squares are too close to tell.
 fn beyond(a: &RobotPoint, b: &RobotPoint, limit: f64) -> bool {
     let (dx, dy) = (b.x_m() - a.x_m(), b.y_m() - a.y_m());
-    let d2 = dx * dx + dy * dy;
+    exceeds(dx * dx + dy * dy, limit)
+}
+
+/// `d2.sqrt() > limit`, with the square root only when the squares are too close to tell.
+fn exceeds(d2: f64, limit: f64) -> bool {
     let l2 = limit * limit;
     if limit.is_nan() || limit < 0.0 {
         d2.sqrt() > limit
@@ -475,6 +479,38 @@ fn arm_into(
     out.len() - before
 }
 
+/// How many hits [`arm_into`] would append from `pos` in direction `dir`, and their
+/// moments relative to the hit at `pos` (which counts as the first point of the set).
+fn arm_extent(seg: &[Ray], pos: usize, dir: isize, params: &DetectParams) -> (usize, Moments) {
+    let mut m = Moments {
+        n: 1.0,
+        ..Moments::default()
+    };
+    let Some(r0) = seg[pos].hit else {
+        return (0, m);
+    };
+    let origin = seg[pos].pt;
+    let mut prev = r0;
+    let mut count = 0;
+    let mut k = pos as isize + dir;
+    while k >= 0 && (k as usize) < seg.len() {
+        let ray = &seg[k as usize];
+        let Some(r) = ray.hit else { break };
+        if (r - prev).abs() > params.occlusion_jump_m {
+            break;
+        }
+        let (dx, dy) = (ray.pt.x_m() - origin.x_m(), ray.pt.y_m() - origin.y_m());
+        if exceeds(dx * dx + dy * dy, params.arm_m) {
+            break;
+        }
+        m.add(dx, dy);
+        count += 1;
+        prev = r;
+        k += dir;
+    }
+    (count, m)
+}
+
 /// Least-squares line through points: (centroid, unit direction, RMS residual).
 fn fit_line(points: &[RobotPoint]) -> Option<([f64; 2], [f64; 2], f64)> {
     if points.len() < 2 {
@@ -503,31 +539,60 @@ fn fit_line(points: &[RobotPoint]) -> Option<([f64; 2], [f64; 2], f64)> {
     Some(([cx, cy], d, (ss / n).sqrt()))
 }
 
-/// The squared cosine of the angle between the principal axes of two point sets (as
-/// [`fit_line`] fits them), from their scatter matrices without trigonometry: the axis of a
-/// set lies at half the angle of `(sxx - syy, 2 sxy)`, and `cos^2 t = (1 + cos 2t) / 2`.
-/// Accurate to about 1e-8; `None` when an axis is poorly defined (a round blob of points).
-fn cos2_between_axes(a: &[RobotPoint], b: &[RobotPoint]) -> Option<f64> {
-    // One pass over the points relative to the first (a few decimetres away at most).
-    let doubled = |points: &[RobotPoint]| {
-        let o = points.first()?;
-        let (mut sx, mut sy, mut sxx, mut syy, mut sxy) = (0.0, 0.0, 0.0, 0.0, 0.0);
-        for p in points {
-            let (dx, dy) = (p.x_m() - o.x_m(), p.y_m() - o.y_m());
-            sx += dx;
-            sy += dy;
-            sxx += dx * dx;
-            syy += dy * dy;
-            sxy += dx * dy;
+/// Sums over a point set of the coordinates relative to one point of it (a few decimetres
+/// away at most), for its principal axis without storing the points.
+#[derive(Debug, Clone, Copy, Default)]
+struct Moments {
+    n: f64,
+    sx: f64,
+    sy: f64,
+    sxx: f64,
+    syy: f64,
+    sxy: f64,
+}
+
+impl Moments {
+    /// Adds the point at `(dx, dy)` from the reference point.
+    fn add(&mut self, dx: f64, dy: f64) {
+        self.n += 1.0;
+        self.sx += dx;
+        self.sy += dy;
+        self.sxx += dx * dx;
+        self.syy += dy * dy;
+        self.sxy += dx * dy;
+    }
+
+    /// The moments of `points` relative to the first.
+    #[cfg(test)]
+    fn of(points: &[RobotPoint]) -> Self {
+        let mut m = Self::default();
+        if let Some(o) = points.first() {
+            for p in points {
+                m.add(p.x_m() - o.x_m(), p.y_m() - o.y_m());
+            }
         }
-        let n = points.len() as f64;
-        let (cxx, cyy, cxy) = (sxx - sx * sx / n, syy - sy * sy / n, sxy - sx * sy / n);
+        m
+    }
+
+    /// `(sxx - syy, 2 sxy)` of the centred scatter matrix: the principal axis lies at half
+    /// its angle. `None` when the axis is poorly defined (a round blob of points): rounding
+    /// leaves it within about 1e-15 of the scatter's trace.
+    fn doubled_axis(&self) -> Option<[f64; 2]> {
+        let n = self.n;
+        let cxx = self.sxx - self.sx * self.sx / n;
+        let cyy = self.syy - self.sy * self.sy / n;
+        let cxy = self.sxy - self.sx * self.sy / n;
         let u = [cxx - cyy, 2.0 * cxy];
-        // Rounding leaves u within about 1e-15 of the trace: trust it only well above that.
         let tolerance = 1e-6 * (cxx + cyy);
         (u[0] * u[0] + u[1] * u[1] > tolerance * tolerance).then_some(u)
-    };
-    let (u, v) = (doubled(a)?, doubled(b)?);
+    }
+}
+
+/// The squared cosine of the angle between the principal axes of two point sets (as
+/// [`fit_line`] fits them), from their moments without trigonometry: `cos^2 t = (1 + cos
+/// 2t) / 2`. Accurate to about 1e-8; `None` when an axis is poorly defined.
+fn cos2_between_axes(a: &Moments, b: &Moments) -> Option<f64> {
+    let (u, v) = (a.doubled_axis()?, b.doubled_axis()?);
     let norms2 = (u[0] * u[0] + u[1] * u[1]) * (v[0] * v[0] + v[1] * v[1]);
     let cos_2t = (u[0] * v[0] + u[1] * v[1]) / norms2.sqrt();
     cos_2t.is_finite().then_some(0.5 * (1.0 + cos_2t))
@@ -662,29 +727,31 @@ fn corners(geometry: &ScanGeometry, seg: &[Ray], params: &DetectParams, out: &mu
         }
         let p = seg[pos].pt;
         let min_len = 0.5 * params.arm_m;
-        let long_enough = |a: &[RobotPoint]| {
-            a.len() > 1
-                && a.len() > params.corner_min_arm_rays
-                && a.last().is_some_and(|q| dist(&p, q) >= min_len)
+        // An arm of `k` hits ending at segment position `end`, the corner point included.
+        let long_enough = |k: usize, end: usize| {
+            k >= 1 && k + 1 > params.corner_min_arm_rays && dist(&p, &seg[end].pt) >= min_len
         };
-        lo.clear();
-        lo.push(p);
-        arm_into(seg, pos, -1, params, &mut lo);
-        if !long_enough(&lo) {
+        // The arms' extents and moments first; their points only for the line fits.
+        let (n_lo, m_lo) = arm_extent(seg, pos, -1, params);
+        if !long_enough(n_lo, pos.wrapping_sub(n_lo)) {
             continue;
         }
-        hi.clear();
-        hi.push(p);
-        arm_into(seg, pos, 1, params, &mut hi);
-        if !long_enough(&hi) {
+        let (n_hi, m_hi) = arm_extent(seg, pos, 1, params);
+        if !long_enough(n_hi, pos + n_hi) {
             continue;
         }
         // Most hits lie on straight walls: rule them out without trigonometry.
         if let Some(c) = straight_cos2
-            && cos2_between_axes(&lo, &hi).is_some_and(|x| x > c)
+            && cos2_between_axes(&m_lo, &m_hi).is_some_and(|x| x > c)
         {
             continue;
         }
+        lo.clear();
+        lo.push(p);
+        lo.extend((1..=n_lo).map(|t| seg[pos - t].pt));
+        hi.clear();
+        hi.push(p);
+        hi.extend((1..=n_hi).map(|t| seg[pos + t].pt));
         let (Some((c1, d1, e1)), Some((c2, d2, e2))) = (fit_line(&lo), fit_line(&hi)) else {
             continue;
         };
@@ -763,6 +830,41 @@ mod tests {
     }
 
     #[test]
+    fn arm_extent_counts_the_arm() {
+        // A box corner, a wall, a jump and a max-range run, with error rays.
+        let g = ScanGeometry::paper();
+        let ranges: Vec<f64> = (0..g.ray_count)
+            .map(|i| match i {
+                0..=199 => 1.0 / g.bearing_rad(i).cos().abs().max(0.3),
+                200..=299 => 0.8 + 0.002 * (i - 200) as f64,
+                300..=359 => g.max_range_m,
+                _ => 1.5 + 0.001 * ((i * 7) % 13) as f64,
+            })
+            .collect();
+        let mut scan = Scan::from_ranges(&g, &ranges, 0.0);
+        for k in [50, 51, 420] {
+            scan.status[k] = RayStatus::Error(1);
+            scan.ranges_m[k] = f64::NAN;
+        }
+        let params = DetectParams::default();
+        for seg in segments(&g, &scan, params.max_skipped_errors) {
+            for pos in 0..seg.len() {
+                for dir in [-1, 1] {
+                    let mut pts = Vec::new();
+                    let n = arm_into(&seg, pos, dir, &params, &mut pts);
+                    let (k, m) = arm_extent(&seg, pos, dir, &params);
+                    assert_eq!(k, n, "{pos} {dir}");
+                    assert_eq!(m.n, n as f64 + 1.0);
+                    for (t, q) in pts.iter().enumerate() {
+                        let at = (pos as isize + dir * (t as isize + 1)) as usize;
+                        assert_eq!(*q, seg[at].pt);
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
     fn beyond_is_the_distance_test() {
         let o = RobotPoint::new(0.5, -0.25);
         for (x, y) in [
@@ -804,7 +906,7 @@ mod tests {
         ] {
             let a = arm_at([1.0, 0.5], 10.0, 12);
             let b = arm_at([1.0, 0.5], 10.0 + deg, 9);
-            let got = cos2_between_axes(&a, &b).unwrap();
+            let got = cos2_between_axes(&Moments::of(&a), &Moments::of(&b)).unwrap();
             assert!((got - want).abs() < 1e-12, "{deg}: {got}");
             // The same as the fitted lines' directions give.
             let (_, d1, _) = fit_line(&a).unwrap();
@@ -814,12 +916,10 @@ mod tests {
         }
         // A single repeated point, or a round blob, has no axis.
         let p = vec![RobotPoint::new(1.0, 1.0); 4];
-        assert_eq!(cos2_between_axes(&p, &arm_at([0.0, 0.0], 0.0, 5)), None);
+        let line = Moments::of(&arm_at([0.0, 0.0], 0.0, 5));
+        assert_eq!(cos2_between_axes(&Moments::of(&p), &line), None);
         let square =
             [(0.0, 0.0), (0.1, 0.0), (0.1, 0.1), (0.0, 0.1)].map(|(x, y)| RobotPoint::new(x, y));
-        assert_eq!(
-            cos2_between_axes(&square, &arm_at([0.0, 0.0], 0.0, 5)),
-            None
-        );
+        assert_eq!(cos2_between_axes(&Moments::of(&square), &line), None);
     }
 }
