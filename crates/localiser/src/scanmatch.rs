@@ -557,9 +557,10 @@ fn oriented_hits(
             continue;
         }
         let m = members.len() as f64;
-        let (mx, my) = members
+        let (sx, sy) = members
             .iter()
-            .fold((0.0, 0.0), |a, q| (a.0 + q.0 / m, a.1 + q.1 / m));
+            .fold((0.0, 0.0), |a, q| (a.0 + q.0, a.1 + q.1));
+        let (mx, my) = (sx / m, sy / m);
         let (mut sxx, mut sxy, mut syy) = (0.0, 0.0, 0.0);
         for q in &members {
             let (dx, dy) = (q.0 - mx, q.1 - my);
@@ -567,8 +568,6 @@ fn oriented_hits(
             sxy += dx * dy;
             syy += dy * dy;
         }
-        // Direction of the fitted line: the principal axis; the normal is perpendicular.
-        let angle = 0.5 * (2.0 * sxy).atan2(sxx - syy);
         let mean = 0.5 * (sxx + syy);
         let rad = (0.25 * (sxx - syy).powi(2) + sxy * sxy).sqrt();
         let (lmax, lmin) = (mean + rad, mean - rad);
@@ -576,7 +575,18 @@ fn oriented_hits(
         if lmax <= 0.0 || lmin > 0.1 * lmax {
             continue;
         }
-        let mut nrm = [-angle.sin(), angle.cos()];
+        // Direction of the fitted line: the principal axis, at half the angle a2 of (sxx -
+        // syy, 2 sxy) (length r = 2 rad > 0 here); the normal is perpendicular. Half-angle
+        // formulas instead of trigonometry, each in its well-conditioned half.
+        let (w, v, r) = (sxx - syy, 2.0 * sxy, 2.0 * rad);
+        let (c, s) = if w >= 0.0 {
+            let c = ((r + w) / (2.0 * r)).sqrt();
+            (c, v / (2.0 * r * c))
+        } else {
+            let s = ((r - w) / (2.0 * r)).sqrt().copysign(v);
+            (v / (2.0 * r * s), s)
+        };
+        let mut nrm = [-s, c];
         // Point the normal toward the sensor.
         if nrm[0] * px + nrm[1] * py > 0.0 {
             nrm = [-nrm[0], -nrm[1]];
@@ -772,6 +782,39 @@ mod tests {
         assert!(t.is_empty());
         let s = cast(&room(), Pose2::default(), None);
         assert!(t.align(&g, &s, Pose2::default(), &p).is_none());
+    }
+
+    #[test]
+    fn normals_of_straight_walls() {
+        // A long wall through (1.5, 0.2) at each direction: every normal is perpendicular to
+        // it and points at the sensor, every point lies on it.
+        let g = ScanGeometry::paper();
+        let p = MatchParams::default();
+        for deg in [
+            0.0f64, 30.0, 45.0, 60.0, 89.0, 90.0, 91.0, 120.0, 135.0, 179.0,
+        ] {
+            let (s, c) = deg.to_radians().sin_cos();
+            let wall = [[
+                1.5 - 20.0 * c,
+                0.2 - 20.0 * s,
+                1.5 + 20.0 * c,
+                0.2 + 20.0 * s,
+            ]];
+            let scan = cast(&wall, Pose2::default(), None);
+            let hits = oriented_hits(&g, &scan, &p, 1);
+            assert!(hits.len() > 100, "{deg}: {}", hits.len());
+            // The unit normal toward the origin: the origin lies on its side of the wall.
+            let mut want = [-s, c];
+            if want[0] * 1.5 + want[1] * 0.2 > 0.0 {
+                want = [-want[0], -want[1]];
+            }
+            for h in &hits {
+                assert!((h.n[0] - want[0]).abs() < 1e-9, "{deg}: {:?} {want:?}", h.n);
+                assert!((h.n[1] - want[1]).abs() < 1e-9, "{deg}: {:?} {want:?}", h.n);
+                let off = (h.p[0] - 1.5) * want[0] + (h.p[1] - 0.2) * want[1];
+                assert!(off.abs() < 1e-9, "{deg}: {off}");
+            }
+        }
     }
 
     #[test]
