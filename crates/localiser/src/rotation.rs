@@ -123,12 +123,12 @@ const SMOOTH_M: f64 = 0.1;
 enum Pair {
     /// Neither ray usable.
     Empty,
-    /// One usable ray.
+    /// One usable ray, or two max-range rays (the same reading).
     Single(Reading),
-    /// Both max range, or both hits on one surface (ranges within `SMOOTH_M`).
+    /// Two hits on one surface (ranges `r0`, `r1` within `SMOOTH_M`).
     Smooth {
-        b0: Reading,
-        b1: Reading,
+        r0: f64,
+        r1: f64,
         /// The segment between the two hit points in the frame of ray `j`: `(r1 cos inc -
         /// r0, r1 sin inc)` and `r0` times its second coordinate.
         dx: f64,
@@ -149,11 +149,15 @@ fn pairs(before: &[Option<Reading>], inc: f64) -> Vec<Pair> {
             match (before[j0], before[j1]) {
                 (Some(b0), Some(b1)) => {
                     if b0.open == b1.open && (b0.range - b1.range).abs() < SMOOTH_M {
+                        if b0.open {
+                            // A smooth max-range stretch reads as its lower ray.
+                            return Pair::Single(b0);
+                        }
                         let (r0, r1) = (b0.range, b1.range);
                         let (dx, dy) = (r1 * ci - r0, r1 * si);
                         Pair::Smooth {
-                            b0,
-                            b1,
+                            r0,
+                            r1,
                             dx,
                             dy,
                             num: r0 * dy,
@@ -177,27 +181,20 @@ fn at_rays(pairs: &[Pair], inc: f64) -> Vec<Pair> {
         .iter()
         .map(|p| match *p {
             Pair::Smooth {
-                b0,
-                b1,
+                r0,
+                r1,
                 dx,
                 dy,
                 num,
             } => {
-                let range = if b0.open {
-                    b0.range
+                let den = cp * dy - sp * dx;
+                let t = num / den;
+                let range = if den.abs() > 1e-12 && t.is_finite() && t > 0.0 {
+                    t
                 } else {
-                    let den = cp * dy - sp * dx;
-                    let t = num / den;
-                    if den.abs() > 1e-12 && t.is_finite() && t > 0.0 {
-                        t
-                    } else {
-                        b0.range + 0.0 * (b1.range - b0.range)
-                    }
+                    r0 + 0.0 * (r1 - r0)
                 };
-                Pair::Single(Reading {
-                    range,
-                    open: b0.open,
-                })
+                Pair::Single(Reading { range, open: false })
             }
             other => other,
         })
@@ -233,26 +230,19 @@ fn cost(
         // j >= 0: truncation is the floor (and needs no libm call).
         let d = match before[j as usize] {
             Pair::Smooth {
-                b0,
-                b1,
+                r0,
+                r1,
                 dx,
                 dy,
                 num,
             } => {
-                // Smooth stretch: interpolate below one ray.
-                if a.open && b0.open {
-                    continue;
-                }
-                let b = if b0.open {
-                    b0.range
+                // Smooth stretch of hits: interpolate below one ray.
+                let den = cp * dy - sp * dx;
+                let t = num / den;
+                let b = if den.abs() > 1e-12 && t.is_finite() && t > 0.0 {
+                    t
                 } else {
-                    let den = cp * dy - sp * dx;
-                    let t = num / den;
-                    if den.abs() > 1e-12 && t.is_finite() && t > 0.0 {
-                        t
-                    } else {
-                        b0.range + frac * (b1.range - b0.range)
-                    }
+                    r0 + frac * (r1 - r0)
                 };
                 (a.range - b).abs()
             }
