@@ -335,7 +335,7 @@ pub fn measure_rotation_with(
         return None;
     }
     // Sub-ray refinement: a 0.25-ray grid within +-1 ray, a 0.05-ray grid within +-0.25 ray
-    // of its best, then a parabola through the best fine point.
+    // of its best, then a parabola through the best fine point and its grid neighbours.
     let coarse_step = 0.25;
     let mut coarse = (f64::INFINITY, s0);
     for k in -4..=4 {
@@ -346,15 +346,24 @@ pub fn measure_rotation_with(
         }
     }
     let step = 0.05;
-    let mut fine = coarse;
-    for k in (-5..=5).filter(|&k| k != 0) {
-        let s = coarse.1 + k as f64 * step;
-        let (c, _) = eval(s);
-        if c < fine.0 {
-            fine = (c, s);
+    let grid: Vec<f64> = (-5..=5)
+        .map(|k| eval(coarse.1 + k as f64 * step).0)
+        .collect();
+    let mut best_k = 5;
+    for (k, &c) in grid.iter().enumerate() {
+        if c < grid[best_k] {
+            best_k = k;
         }
     }
-    let (cm, cp) = (eval(fine.1 - step).0, eval(fine.1 + step).0);
+    let fine = (grid[best_k], coarse.1 + (best_k as f64 - 5.0) * step);
+    let cm = match best_k.checked_sub(1) {
+        Some(k) => grid[k],
+        None => eval(fine.1 - step).0,
+    };
+    let cp = match grid.get(best_k + 1) {
+        Some(&c) => c,
+        None => eval(fine.1 + step).0,
+    };
     let mut s = fine.1;
     let den = cm - 2.0 * fine.0 + cp;
     if cm.is_finite() && cp.is_finite() && den > 1e-15 {
