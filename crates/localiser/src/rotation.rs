@@ -346,8 +346,12 @@ pub fn measure_rotation_with(
         }
     }
     let step = 0.05;
+    // The middle point is the coarse best, already scored.
     let grid: Vec<f64> = (-5..=5)
-        .map(|k| eval(coarse.1 + k as f64 * step).0)
+        .map(|k| match k {
+            0 => coarse.0,
+            _ => eval(coarse.1 + k as f64 * step).0,
+        })
         .collect();
     let mut best_k = 5;
     for (k, &c) in grid.iter().enumerate() {
