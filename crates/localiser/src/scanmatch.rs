@@ -525,16 +525,15 @@ fn oriented_hits(
         .collect();
     let k = params.normal_rays.max(1);
     let mut out = Vec::with_capacity(n);
-    let mut members = Vec::with_capacity(2 * k + 1);
     // Squared thresholds: no square root per neighbour.
     let surface2 = params.surface_m * params.surface_m;
     let half2 = params.normal_half_length_m * params.normal_half_length_m;
     for i in (0..n).step_by(stride.max(1)) {
         let Some(p) = pts[i] else { continue };
         let (px, py) = (p.x_m(), p.y_m());
-        // Walk outwards on each side while the hits stay on the surface.
-        members.clear();
-        members.push((px, py));
+        // Walk outwards on each side while the hits stay on the surface, summing the members'
+        // coordinates relative to the hit (one pass, nothing stored).
+        let (mut m, mut sx, mut sy, mut sxx, mut syy, mut sxy) = (1.0, 0.0, 0.0, 0.0, 0.0, 0.0);
         for dir in [-1i64, 1] {
             let mut prev = (px, py);
             for step in 1..=k as i64 {
@@ -549,25 +548,24 @@ fn oriented_hits(
                 {
                     break;
                 }
-                members.push(q);
+                let (dx, dy) = (q.0 - px, q.1 - py);
+                m += 1.0;
+                sx += dx;
+                sy += dy;
+                sxx += dx * dx;
+                syy += dy * dy;
+                sxy += dx * dy;
                 prev = q;
             }
         }
-        if members.len() < 3 {
+        if m < 3.0 {
             continue;
         }
-        let m = members.len() as f64;
-        let (sx, sy) = members
-            .iter()
-            .fold((0.0, 0.0), |a, q| (a.0 + q.0, a.1 + q.1));
+        // The members' mean relative to the hit, and their scatter about it.
         let (mx, my) = (sx / m, sy / m);
-        let (mut sxx, mut sxy, mut syy) = (0.0, 0.0, 0.0);
-        for q in &members {
-            let (dx, dy) = (q.0 - mx, q.1 - my);
-            sxx += dx * dx;
-            sxy += dx * dy;
-            syy += dy * dy;
-        }
+        let sxx = sxx - sx * mx;
+        let syy = syy - sy * my;
+        let sxy = sxy - sx * my;
         let mean = 0.5 * (sxx + syy);
         let rad = (0.25 * (sxx - syy).powi(2) + sxy * sxy).sqrt();
         let (lmax, lmin) = (mean + rad, mean - rad);
@@ -592,7 +590,7 @@ fn oriented_hits(
             nrm = [-nrm[0], -nrm[1]];
         }
         // The point on the fitted line nearest the hit (removes the range noise across it).
-        let off = (px - mx) * nrm[0] + (py - my) * nrm[1];
+        let off = -mx * nrm[0] - my * nrm[1];
         out.push(Oriented {
             p: [px - off * nrm[0], py - off * nrm[1]],
             n: nrm,
