@@ -263,6 +263,49 @@ fn dist(a: &RobotPoint, b: &RobotPoint) -> f64 {
 /// a row; a longer gap splits the scan). A scan whose length differs from the geometry's is
 /// read up to the shorter of the two.
 pub fn detect(geometry: &ScanGeometry, scan: &Scan, params: &DetectParams) -> Vec<Landmark> {
+    detect_in(geometry, scan, params, None)
+}
+
+/// The landmarks of [`detect`] whose point lies within `radius_m` of `centre` (the same
+/// values, in the same order), with corners sought only near `centre`.
+pub fn detect_near(
+    geometry: &ScanGeometry,
+    scan: &Scan,
+    params: &DetectParams,
+    centre: RobotPoint,
+    radius_m: f64,
+) -> Vec<Landmark> {
+    let reach = radius_m + corner_shift_bound(params);
+    let mut out = detect_in(geometry, scan, params, Some((centre, reach)));
+    out.retain(|l| l.robot_point().distance_m(&centre) <= radius_m);
+    out
+}
+
+/// How far a corner's refined point can lie from its ray's hit, metres: each arm's line
+/// passes through its centroid, within `arm_m` of the hit, and two lines turning by `t`
+/// that pass within `a` and `b` of a point meet within `(a + b) / sin t` of it (1 % margin
+/// for rounding; infinite when corners may turn by almost nothing).
+fn corner_shift_bound(params: &DetectParams) -> f64 {
+    if !params.corner_refine {
+        return 0.0;
+    }
+    let t = params.corner_min_angle_rad.min(std::f64::consts::FRAC_PI_2);
+    let s = t.sin();
+    if s.is_finite() && s > 1e-3 && params.arm_m.is_finite() {
+        2.02 * params.arm_m / s + 1e-6
+    } else {
+        f64::INFINITY
+    }
+}
+
+/// [`detect`], with corners only where a hit lies within `reach` of a point (when given):
+/// every corner whose refined point can lie within `reach - corner_shift_bound` of it.
+fn detect_in(
+    geometry: &ScanGeometry,
+    scan: &Scan,
+    params: &DetectParams,
+    near: Option<(RobotPoint, f64)>,
+) -> Vec<Landmark> {
     let mut out = Vec::new();
     for segment in segments(geometry, scan, params.max_skipped_errors) {
         let mut found = Vec::new();
@@ -273,7 +316,7 @@ pub fn detect(geometry: &ScanGeometry, scan: &Scan, params: &DetectParams) -> Ve
             occlusions(geometry, &segment, params, &mut found);
         }
         if params.corners {
-            corners(geometry, &segment, params, &mut found);
+            corners(geometry, &segment, params, near, &mut found);
         }
         out.extend(found);
     }
@@ -479,15 +522,10 @@ fn arm_into(
     out.len() - before
 }
 
-/// How many hits [`arm_into`] would append from `pos` in direction `dir`, and their
-/// moments relative to the hit at `pos` (which counts as the first point of the set).
-fn arm_extent(seg: &[Ray], pos: usize, dir: isize, params: &DetectParams) -> (usize, Moments) {
-    let mut m = Moments {
-        n: 1.0,
-        ..Moments::default()
-    };
+/// How many hits [`arm_into`] would append from `pos` in direction `dir`.
+fn arm_len(seg: &[Ray], pos: usize, dir: isize, params: &DetectParams) -> usize {
     let Some(r0) = seg[pos].hit else {
-        return (0, m);
+        return 0;
     };
     let origin = seg[pos].pt;
     let mut prev = r0;
@@ -503,12 +541,26 @@ fn arm_extent(seg: &[Ray], pos: usize, dir: isize, params: &DetectParams) -> (us
         if exceeds(dx * dx + dy * dy, params.arm_m) {
             break;
         }
-        m.add(dx, dy);
         count += 1;
         prev = r;
         k += dir;
     }
-    (count, m)
+    count
+}
+
+/// Running sums of a segment's hit points: entry `k` holds the [`Moments`] of positions
+/// `0..k` (misses add nothing), so any run's moments cost one subtraction.
+fn prefix_moments(seg: &[Ray]) -> Vec<Moments> {
+    let mut out = Vec::with_capacity(seg.len() + 1);
+    let mut m = Moments::default();
+    out.push(m);
+    for ray in seg {
+        if ray.hit.is_some() {
+            m.add(ray.pt.x_m(), ray.pt.y_m());
+        }
+        out.push(m);
+    }
+    out
 }
 
 /// Least-squares line through points: (centroid, unit direction, RMS residual).
@@ -562,6 +614,19 @@ impl Moments {
         self.sxy += dx * dy;
     }
 
+    /// The moments of the run `lo..=hi` from the running sums of [`prefix_moments`].
+    fn window(prefix: &[Moments], lo: usize, hi: usize) -> Self {
+        let (a, b) = (&prefix[lo], &prefix[hi + 1]);
+        Self {
+            n: b.n - a.n,
+            sx: b.sx - a.sx,
+            sy: b.sy - a.sy,
+            sxx: b.sxx - a.sxx,
+            syy: b.syy - a.syy,
+            sxy: b.sxy - a.sxy,
+        }
+    }
+
     /// The moments of `points` relative to the first.
     #[cfg(test)]
     fn of(points: &[RobotPoint]) -> Self {
@@ -576,7 +641,7 @@ impl Moments {
 
     /// `(sxx - syy, 2 sxy)` of the centred scatter matrix: the principal axis lies at half
     /// its angle. `None` when the axis is poorly defined (a round blob of points): rounding
-    /// leaves it within about 1e-15 of the scatter's trace.
+    /// leaves it within about 1e-9 of the scatter's trace (running sums over a scan).
     fn doubled_axis(&self) -> Option<[f64; 2]> {
         let n = self.n;
         let cxx = self.sxx - self.sx * self.sx / n;
@@ -710,21 +775,38 @@ fn score(l: &Landmark, params: &DetectParams) -> f64 {
     s
 }
 
-/// Corners on one segment, one per bend (the sharpest candidate of a run).
-fn corners(geometry: &ScanGeometry, seg: &[Ray], params: &DetectParams, out: &mut Vec<Landmark>) {
-    // (pos, turn angle, refined point)
-    let mut cands: Vec<(usize, f64, RobotPoint)> = Vec::new();
-    // Squared cosine of the smallest corner turn, with a margin for rounding: arms whose
-    // fitted lines' angle has a larger squared cosine turn less than the smallest corner.
-    let a = params.corner_min_angle_rad;
-    let straight_cos2 =
-        (a > 0.0 && a < std::f64::consts::FRAC_PI_2).then(|| a.cos().powi(2) + 1e-7);
-    // Each arm with the corner point first.
-    let (mut lo, mut hi) = (Vec::new(), Vec::new());
-    for pos in 0..seg.len() {
-        if seg[pos].hit.is_none() {
-            continue;
+/// Tests one segment position after another for a corner, with scratch space for the arms.
+struct CornerFinder<'a> {
+    seg: &'a [Ray],
+    params: &'a DetectParams,
+    /// Squared cosine of the smallest corner turn plus a rounding margin, when below 90 deg.
+    straight_cos2: Option<f64>,
+    prefix: Vec<Moments>,
+    lo: Vec<RobotPoint>,
+    hi: Vec<RobotPoint>,
+}
+
+impl<'a> CornerFinder<'a> {
+    fn new(seg: &'a [Ray], params: &'a DetectParams) -> Self {
+        // Arms whose fitted lines' angle has a larger squared cosine turn less than the
+        // smallest corner.
+        let a = params.corner_min_angle_rad;
+        let straight_cos2 =
+            (a > 0.0 && a < std::f64::consts::FRAC_PI_2).then(|| a.cos().powi(2) + 1e-7);
+        Self {
+            seg,
+            params,
+            straight_cos2,
+            prefix: prefix_moments(seg),
+            lo: Vec::new(),
+            hi: Vec::new(),
         }
+    }
+
+    /// The turn and refined point of a corner at segment position `pos`, if it is one.
+    fn candidate(&mut self, pos: usize) -> Option<(f64, RobotPoint)> {
+        let (seg, params) = (self.seg, self.params);
+        seg[pos].hit?;
         let p = seg[pos].pt;
         let min_len = 0.5 * params.arm_m;
         // An arm of `k` hits ending at segment position `end`, the corner point included.
@@ -732,44 +814,103 @@ fn corners(geometry: &ScanGeometry, seg: &[Ray], params: &DetectParams, out: &mu
             k >= 1 && k + 1 > params.corner_min_arm_rays && dist(&p, &seg[end].pt) >= min_len
         };
         // The arms' extents and moments first; their points only for the line fits.
-        let (n_lo, m_lo) = arm_extent(seg, pos, -1, params);
+        let n_lo = arm_len(seg, pos, -1, params);
         if !long_enough(n_lo, pos.wrapping_sub(n_lo)) {
-            continue;
+            return None;
         }
-        let (n_hi, m_hi) = arm_extent(seg, pos, 1, params);
+        let n_hi = arm_len(seg, pos, 1, params);
         if !long_enough(n_hi, pos + n_hi) {
-            continue;
+            return None;
         }
         // Most hits lie on straight walls: rule them out without trigonometry.
-        if let Some(c) = straight_cos2
-            && cos2_between_axes(&m_lo, &m_hi).is_some_and(|x| x > c)
+        if let Some(c) = self.straight_cos2
+            && cos2_between_axes(
+                &Moments::window(&self.prefix, pos - n_lo, pos),
+                &Moments::window(&self.prefix, pos, pos + n_hi),
+            )
+            .is_some_and(|x| x > c)
         {
-            continue;
+            return None;
         }
+        let (lo, hi) = (&mut self.lo, &mut self.hi);
         lo.clear();
         lo.push(p);
         lo.extend((1..=n_lo).map(|t| seg[pos - t].pt));
         hi.clear();
         hi.push(p);
         hi.extend((1..=n_hi).map(|t| seg[pos + t].pt));
-        let (Some((c1, d1, e1)), Some((c2, d2, e2))) = (fit_line(&lo), fit_line(&hi)) else {
-            continue;
-        };
+        let (c1, d1, e1) = fit_line(lo)?;
+        let (c2, d2, e2) = fit_line(hi)?;
         if e1 > params.corner_max_residual_m || e2 > params.corner_max_residual_m {
-            continue;
+            return None;
         }
         // Angle between the two lines (undirected), 0 = straight.
         let dot = (d1[0] * d2[0] + d1[1] * d2[1]).abs().min(1.0);
         let turn = dot.acos();
         if turn < params.corner_min_angle_rad {
-            continue;
+            return None;
         }
         let refined = if params.corner_refine {
             intersect(c1, d1, c2, d2).unwrap_or(p)
         } else {
             p
         };
-        cands.push((pos, turn, refined));
+        Some((turn, refined))
+    }
+}
+
+/// Corners on one segment, one per bend (the sharpest candidate of a run). With `near =
+/// (c, reach)`, candidates are tried only at hits within `reach` of `c` and along the runs
+/// of candidates they start, which yields the same corners wherever a run reaches that far.
+fn corners(
+    geometry: &ScanGeometry,
+    seg: &[Ray],
+    params: &DetectParams,
+    near: Option<(RobotPoint, f64)>,
+    out: &mut Vec<Landmark>,
+) {
+    let mut finder = CornerFinder::new(seg, params);
+    // (pos, turn angle, refined point)
+    let mut cands: Vec<(usize, f64, RobotPoint)> = Vec::new();
+    match near {
+        None => {
+            for pos in 0..seg.len() {
+                if let Some((turn, pt)) = finder.candidate(pos) {
+                    cands.push((pos, turn, pt));
+                }
+            }
+        }
+        Some((c, reach)) => {
+            let mut tried = vec![false; seg.len()];
+            let mut found: Vec<Option<(f64, RobotPoint)>> = vec![None; seg.len()];
+            for pos in 0..seg.len() {
+                if seg[pos].hit.is_some() && !beyond(&c, &seg[pos].pt, reach) {
+                    tried[pos] = true;
+                    found[pos] = finder.candidate(pos);
+                }
+            }
+            // Follow each run of candidates to its ends, up then down.
+            for pos in 0..seg.len() {
+                let k = pos + 1;
+                if found[pos].is_some() && k < seg.len() && !tried[k] {
+                    tried[k] = true;
+                    found[k] = finder.candidate(k);
+                }
+            }
+            for pos in (1..seg.len()).rev() {
+                let k = pos - 1;
+                if found[pos].is_some() && !tried[k] {
+                    tried[k] = true;
+                    found[k] = finder.candidate(k);
+                }
+            }
+            cands.extend(
+                found
+                    .iter()
+                    .enumerate()
+                    .filter_map(|(pos, f)| f.map(|(turn, pt)| (pos, turn, pt))),
+            );
+        }
     }
     // Keep the sharpest candidate of each run of neighbouring candidates.
     let mut i = 0;
@@ -830,7 +971,7 @@ mod tests {
     }
 
     #[test]
-    fn arm_extent_counts_the_arm() {
+    fn arm_len_and_running_moments_match_the_arm() {
         // A box corner, a wall, a jump and a max-range run, with error rays.
         let g = ScanGeometry::paper();
         let ranges: Vec<f64> = (0..g.ray_count)
@@ -848,16 +989,39 @@ mod tests {
         }
         let params = DetectParams::default();
         for seg in segments(&g, &scan, params.max_skipped_errors) {
+            let prefix = prefix_moments(&seg);
             for pos in 0..seg.len() {
                 for dir in [-1, 1] {
                     let mut pts = Vec::new();
                     let n = arm_into(&seg, pos, dir, &params, &mut pts);
-                    let (k, m) = arm_extent(&seg, pos, dir, &params);
-                    assert_eq!(k, n, "{pos} {dir}");
-                    assert_eq!(m.n, n as f64 + 1.0);
+                    assert_eq!(arm_len(&seg, pos, dir, &params), n, "{pos} {dir}");
                     for (t, q) in pts.iter().enumerate() {
                         let at = (pos as isize + dir * (t as isize + 1)) as usize;
                         assert_eq!(*q, seg[at].pt);
+                    }
+                    // The running sums give the arm's scatter (with its hit) as the points do
+                    // (for arms of three points or more, as corners use them).
+                    if seg[pos].hit.is_none() || n < 2 {
+                        continue;
+                    }
+                    let (lo, hi) = if dir < 0 {
+                        (pos - n, pos)
+                    } else {
+                        (pos, pos + n)
+                    };
+                    let m = Moments::window(&prefix, lo, hi);
+                    assert_eq!(m.n, n as f64 + 1.0);
+                    pts.insert(0, seg[pos].pt);
+                    let want = Moments::of(&pts);
+                    match (m.doubled_axis(), want.doubled_axis()) {
+                        (Some(a), Some(b)) => {
+                            // Within 1e-11 m^2: a corner's arms (0.1 m or longer) scatter
+                            // by 5e-3 m^2 or more, so their axes' cosine moves by < 1e-8.
+                            for t in 0..2 {
+                                assert!((a[t] - b[t]).abs() <= 1e-11, "{pos} {dir} {a:?} {b:?}");
+                            }
+                        }
+                        (a, b) => assert_eq!(a.is_some(), b.is_some(), "{pos} {dir}"),
                     }
                 }
             }

@@ -32,7 +32,7 @@ mod error;
 mod select;
 mod track;
 
-pub use detect::{DetectParams, Landmark, LandmarkKind, OpenSide, detect};
+pub use detect::{DetectParams, Landmark, LandmarkKind, OpenSide, detect, detect_near};
 pub use error::LandmarksError;
 pub use select::{SelectParams, select, select_nearest};
 pub use track::{TrackParams, TrackUpdate, Tracker};

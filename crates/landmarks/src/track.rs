@@ -2,7 +2,7 @@
 
 use scan_types::{RobotPoint, Scan, ScanGeometry};
 
-use crate::{DetectParams, Landmark, OpenSide, detect};
+use crate::{DetectParams, Landmark, OpenSide, detect_near};
 
 /// How a [`Tracker`] re-identifies its landmark.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -135,7 +135,8 @@ impl Tracker {
         let gate = self.params.gate_m
             + self.params.gate_growth_per_m * (travelled_m - self.last_travelled_m).abs()
             + self.params.gate_ray_spacings * pred.range_m() * geometry.increment_rad.abs();
-        let found = detect(geometry, scan, &self.params.detect.permissive());
+        // Only landmarks within the gate can match: corners are sought near the prediction.
+        let found = detect_near(geometry, scan, &self.params.detect.permissive(), pred, gate);
         let compatible = |l: &Landmark| match (self.last.open_side, l.open_side) {
             (Some(a), Some(b)) => a == b || a == OpenSide::Both || b == OpenSide::Both,
             _ => true,

@@ -1,6 +1,6 @@
 //! Detection rules on hand-built scans whose landmarks can be placed by hand.
 
-use landmarks::{DetectParams, LandmarkKind, OpenSide, detect, select_nearest};
+use landmarks::{DetectParams, LandmarkKind, OpenSide, detect, detect_near, select_nearest};
 use scan_types::testkit::{boxed, noisy, scan_at};
 use scan_types::{RayStatus, Scan, ScanGeometry, WorldPoint};
 use std::f64::consts::FRAC_PI_2;
@@ -321,4 +321,57 @@ fn short_dropout_run_in_a_wall_is_not_open_space() {
         "{jambs:?}"
     );
     assert!(jambs.iter().any(|l| dist(l, 1.0, 0.45) < 0.02), "{jambs:?}");
+}
+
+#[test]
+fn detect_near_is_detect_within_the_radius() {
+    // A room with two boxes and a zig-zag wall (many corners, runs of corner candidates),
+    // seen from several poses with noise: `detect_near` gives exactly the landmarks of
+    // `detect` within the radius, for centres on and between landmarks.
+    let g = paper_geometry();
+    let mut world = boxed(-3.0, -3.0, 3.0, 3.0);
+    world.extend(boxed(1.0, 0.5, 1.6, 1.1));
+    world.extend(boxed(-1.5, -2.0, -1.0, -1.2));
+    world.extend([
+        ((2.0, -2.5), (2.4, -2.1)),
+        ((2.4, -2.1), (2.0, -1.7)),
+        ((2.0, -1.7), (2.4, -1.3)),
+    ]);
+    let mut checked = 0;
+    for (k, &(x, y, th)) in [
+        (0.0, 0.0, 0.0),
+        (-0.5, 0.3, 0.7),
+        (0.8, -1.0, -1.2),
+        (1.9, -1.9, 0.1),
+    ]
+    .iter()
+    .enumerate()
+    {
+        let scan = noisy(&g, &scan_at(&g, &world, x, y, th), 0.01, k as u64);
+        for params in [
+            DetectParams::default().permissive(),
+            DetectParams::default(),
+        ] {
+            let all = detect(&g, &scan, &params);
+            assert!(all.iter().any(|l| l.kind == LandmarkKind::Corner));
+            let mut centres: Vec<_> = all.iter().map(|l| l.robot_point()).collect();
+            centres.push(scan_types::RobotPoint::new(0.7, -0.4));
+            for c in centres {
+                for radius in [0.0, 0.05, 0.1, 0.3, 1.0, f64::INFINITY] {
+                    let want: Vec<_> = all
+                        .iter()
+                        .filter(|l| l.robot_point().distance_m(&c) <= radius)
+                        .copied()
+                        .collect();
+                    assert_eq!(detect_near(&g, &scan, &params, c, radius), want);
+                    checked += want.len();
+                }
+            }
+        }
+    }
+    assert!(checked > 100, "{checked}");
+    // A NaN radius matches nothing, without panicking.
+    let scan = scan_at(&g, &world, 0.0, 0.0, 0.0);
+    let c = scan_types::RobotPoint::new(1.0, 0.0);
+    assert!(detect_near(&g, &scan, &DetectParams::default(), c, f64::NAN).is_empty());
 }
