@@ -92,6 +92,7 @@ impl Cycle {
         detect.range_limit_margin_m = cfg.landmarks.range_limit_margin_m;
         detect.reject_near_range_limit = cfg.landmarks.range_limit_margin_m > 0.0;
         detect.occlusion_edges = cfg.landmarks.occlusion_edges;
+        detect.corners = cfg.landmarks.corners;
         detect.occlusion_jump_m = cfg.landmarks.min_jump_m;
         let mut select = SelectParams::default();
         select.max_bearing_rad = cfg.landmarks.max_bearing_deg.to_radians();
