@@ -204,7 +204,8 @@ fn at_rays(pairs: &[Pair], inc: f64) -> Vec<Pair> {
 /// Mean clipped squared difference and pair count at fractional shift `s` (rays), with
 /// `before` prepared by [`pairs`] (or by [`at_rays`] when `s` is a whole number).
 ///
-/// Only every `every`-th ray of `after` counts (1: all).
+/// Only every `every`-th ray of `after` counts (1: all). Gives up with an infinite cost as
+/// soon as the sum of squares exceeds `limit`.
 fn cost(
     before: &[Pair],
     after: &[Option<Reading>],
@@ -212,6 +213,7 @@ fn cost(
     clip: f64,
     inc: f64,
     every: usize,
+    limit: f64,
 ) -> (f64, usize) {
     let n = before.len();
     // Between two hits the surface is taken as the straight segment joining them (exact on
@@ -268,6 +270,9 @@ fn cost(
         let d = d.min(clip);
         sum += d * d;
         count += 1;
+        if sum > limit {
+            return (f64::INFINITY, count);
+        }
     }
     if count == 0 {
         (f64::INFINITY, 0)
@@ -297,7 +302,7 @@ pub fn measure_rotation_with(
     let whole = at_rays(&b, inc);
     let eval = |s: f64| {
         let table = if s == s.floor() { &whole } else { &b };
-        let (c, k) = cost(table, &a, s, clip, inc, 1);
+        let (c, k) = cost(table, &a, s, clip, inc, 1, f64::INFINITY);
         if k >= params.min_pairs {
             (c, k)
         } else {
@@ -305,18 +310,30 @@ pub fn measure_rotation_with(
         }
     };
     // Integer search: every shift ranked on every second ray, the best three on all rays.
+    // Shifts are scored outward from the commanded one, and a shift is given up once its
+    // sum shows it worse than three scored ones whatever its remaining rays add (its mean
+    // is at least the sum over the most rays it could count; 1e-12 covers rounding).
     let base = centre.round() as i64;
-    let mut ranked: Vec<(f64, i64)> = (-half..=half)
-        .map(|k| {
-            let (c, pairs) = cost(&whole, &a, (base + k) as f64, clip, inc, 2);
-            let c = if 2 * pairs >= params.min_pairs {
-                c
-            } else {
-                f64::INFINITY
-            };
-            (c, base + k)
-        })
-        .collect();
+    let most = a.len().div_ceil(2) as f64;
+    let mut ranked: Vec<(f64, i64)> = (-half..=half).map(|k| (f64::INFINITY, base + k)).collect();
+    let mut top3 = [f64::INFINITY; 3];
+    for t in 0..ranked.len() {
+        // 0, -1, +1, -2, +2, ... from the middle entry.
+        let off = (t as i64 + 1) / 2 * if t % 2 == 1 { -1 } else { 1 };
+        let idx = (half + off) as usize;
+        let limit = top3[2] * most * (1.0 + 1e-12);
+        let (c, pairs) = cost(&whole, &a, ranked[idx].1 as f64, clip, inc, 2, limit);
+        let c = if 2 * pairs >= params.min_pairs {
+            c
+        } else {
+            f64::INFINITY
+        };
+        ranked[idx].0 = c;
+        if c < top3[2] {
+            top3[2] = c;
+            top3.sort_by(f64::total_cmp);
+        }
+    }
     ranked.sort_by(|x, y| x.0.total_cmp(&y.0));
     let mut best = (f64::INFINITY, 0i64);
     for &(_, shift) in ranked.iter().take(3).filter(|r| r.0.is_finite()) {
@@ -340,7 +357,8 @@ pub fn measure_rotation_with(
     let mut coarse = (f64::INFINITY, s0);
     for k in -4..=4 {
         let s = s0 + k as f64 * coarse_step;
-        let (c, _) = eval(s);
+        // The middle point is the integer best, already scored.
+        let c = if k == 0 { best.0 } else { eval(s).0 };
         if c < coarse.0 {
             coarse = (c, s);
         }
@@ -518,9 +536,18 @@ mod tests {
             } else {
                 prepared.clone()
             };
-            let got = cost(&table, &a, s, 0.3, inc, 1);
+            let got = cost(&table, &a, s, 0.3, inc, 1, f64::INFINITY);
             assert_eq!(want.1, got.1, "{s}");
             assert_eq!(want.0.to_bits(), got.0.to_bits(), "{s}");
+            // A sum limit above the whole sum changes nothing; one below it gives up.
+            if got.0.is_finite() && got.0 > 0.0 {
+                let total = got.0 * got.1 as f64;
+                let kept = cost(&table, &a, s, 0.3, inc, 1, 2.0 * total);
+                assert_eq!(kept.0.to_bits(), got.0.to_bits(), "{s}");
+                let cut = cost(&table, &a, s, 0.3, inc, 1, 0.5 * total);
+                assert_eq!(cut.0, f64::INFINITY, "{s}");
+                assert!(cut.1 < got.1, "{s}");
+            }
         }
     }
 }
