@@ -300,15 +300,18 @@ pub fn measure_rotation_with(
     let clip = params.clip_m;
     let b = pairs(&b, inc);
     let whole = at_rays(&b, inc);
-    let eval = |s: f64| {
+    // The cost at shift `s` on all rays; infinite once it surely exceeds `above` (a mean).
+    let eval_below = |s: f64, above: f64| {
         let table = if s == s.floor() { &whole } else { &b };
-        let (c, k) = cost(table, &a, s, clip, inc, 1, f64::INFINITY);
+        let limit = above * a.len() as f64 * (1.0 + 1e-12);
+        let (c, k) = cost(table, &a, s, clip, inc, 1, limit);
         if k >= params.min_pairs {
             (c, k)
         } else {
             (f64::INFINITY, k)
         }
     };
+    let eval = |s: f64| eval_below(s, f64::INFINITY);
     // Integer search: every shift ranked on every second ray, the best three on all rays.
     // Shifts are scored outward from the commanded one, and a shift is given up once its
     // sum shows it worse than three scored ones whatever its remaining rays add (its mean
@@ -337,7 +340,7 @@ pub fn measure_rotation_with(
     ranked.sort_by(|x, y| x.0.total_cmp(&y.0));
     let mut best = (f64::INFINITY, 0i64);
     for &(_, shift) in ranked.iter().take(3).filter(|r| r.0.is_finite()) {
-        let (c, _) = eval(shift as f64);
+        let (c, _) = eval_below(shift as f64, best.0);
         if c < best.0 {
             best = (c, shift);
         }
@@ -347,8 +350,10 @@ pub fn measure_rotation_with(
     }
     let s0 = best.1 as f64;
     // Contrast: the alignment must be distinctly better than three rays off.
-    let side = eval(s0 - 3.0).0.min(eval(s0 + 3.0).0);
-    if side.is_finite() && side < params.min_contrast * best.0 + 1e-9 {
+    // (Only whether a side scores below the bar matters: each is given up above it.)
+    let bar = params.min_contrast * best.0 + 1e-9;
+    let side = eval_below(s0 - 3.0, bar).0.min(eval_below(s0 + 3.0, bar).0);
+    if side.is_finite() && side < bar {
         return None;
     }
     // Sub-ray refinement: a 0.25-ray grid within +-1 ray, a 0.05-ray grid within +-0.25 ray
@@ -358,7 +363,11 @@ pub fn measure_rotation_with(
     for k in -4..=4 {
         let s = s0 + k as f64 * coarse_step;
         // The middle point is the integer best, already scored.
-        let c = if k == 0 { best.0 } else { eval(s).0 };
+        let c = if k == 0 {
+            best.0
+        } else {
+            eval_below(s, coarse.0).0
+        };
         if c < coarse.0 {
             coarse = (c, s);
         }
