@@ -83,24 +83,9 @@ struct Cycle {
 }
 
 impl Cycle {
-    // Field by field, in the order `Navigator::new` overrides the presets.
-    #[allow(clippy::field_reassign_with_default)]
     fn new(g: ScanGeometry) -> Self {
         let cfg = Config::preset(Method::Goalseek);
-        let mut detect = DetectParams::default();
-        detect.neighbour_n = cfg.landmarks.neighbour_n;
-        detect.range_limit_margin_m = cfg.landmarks.range_limit_margin_m;
-        detect.reject_near_range_limit = cfg.landmarks.range_limit_margin_m > 0.0;
-        detect.occlusion_edges = cfg.landmarks.occlusion_edges;
-        detect.corners = cfg.landmarks.corners;
-        detect.occlusion_jump_m = cfg.landmarks.min_jump_m;
-        let mut select = SelectParams::default();
-        select.max_bearing_rad = cfg.landmarks.max_bearing_deg.to_radians();
-        select.min_ahead_m = cfg.landmarks.min_ob_m;
-        let mut track = TrackParams::default();
-        track.gate_m = cfg.tracking.gate_m;
-        track.max_missed_scans = cfg.tracking.max_missed_scans;
-        track.detect = detect;
+        let (detect, select, track) = robot_app::navigator::landmark_params(&cfg);
         Self {
             expander: Expander::new(&g),
             clearances: vec![0.0; g.ray_count],

@@ -107,31 +107,7 @@ impl<'a, L: LaserSource, M: MotionBase + ?Sized> Navigator<'a, L, M> {
         goal: WorldPoint,
     ) -> Self {
         let geometry = *laser.geometry();
-        let (detect_params, select_params, mut track_params) = match cfg.method {
-            Method::Paper => (
-                DetectParams::paper(),
-                SelectParams::paper(),
-                TrackParams::paper(),
-            ),
-            Method::Goalseek => (
-                DetectParams::default(),
-                SelectParams::default(),
-                TrackParams::default(),
-            ),
-        };
-        let mut detect_params = detect_params;
-        detect_params.neighbour_n = cfg.landmarks.neighbour_n;
-        detect_params.range_limit_margin_m = cfg.landmarks.range_limit_margin_m;
-        detect_params.reject_near_range_limit = cfg.landmarks.range_limit_margin_m > 0.0;
-        detect_params.occlusion_edges = cfg.landmarks.occlusion_edges;
-        detect_params.corners = cfg.landmarks.corners;
-        detect_params.occlusion_jump_m = cfg.landmarks.min_jump_m;
-        let mut select_params = select_params;
-        select_params.max_bearing_rad = cfg.landmarks.max_bearing_deg.to_radians();
-        select_params.min_ahead_m = cfg.landmarks.min_ob_m;
-        track_params.gate_m = cfg.tracking.gate_m;
-        track_params.max_missed_scans = cfg.tracking.max_missed_scans;
-        track_params.detect = detect_params;
+        let (detect_params, select_params, track_params) = landmark_params(cfg);
         let planner = Planner::new(crate::navigator::planner_params(cfg));
         Self {
             expander: Expander::new(&geometry),
@@ -675,6 +651,35 @@ fn erode(c: &[f64], half: usize, out: &mut Vec<f64>) {
     }));
 }
 
+/// Landmark detection, selection and tracking parameters from the configuration: the method's
+/// preset with the configured keys applied.
+pub fn landmark_params(cfg: &Config) -> (DetectParams, SelectParams, TrackParams) {
+    let (mut detect, mut select, mut track) = match cfg.method {
+        Method::Paper => (
+            DetectParams::paper(),
+            SelectParams::paper(),
+            TrackParams::paper(),
+        ),
+        Method::Goalseek => (
+            DetectParams::default(),
+            SelectParams::default(),
+            TrackParams::default(),
+        ),
+    };
+    detect.neighbour_n = cfg.landmarks.neighbour_n;
+    detect.range_limit_margin_m = cfg.landmarks.range_limit_margin_m;
+    detect.reject_near_range_limit = cfg.landmarks.range_limit_margin_m > 0.0;
+    detect.occlusion_edges = cfg.landmarks.occlusion_edges;
+    detect.corners = cfg.landmarks.corners;
+    detect.occlusion_jump_m = cfg.landmarks.min_jump_m;
+    select.max_bearing_rad = cfg.landmarks.max_bearing_deg.to_radians();
+    select.min_ahead_m = cfg.landmarks.min_ob_m;
+    track.gate_m = cfg.tracking.gate_m;
+    track.max_missed_scans = cfg.tracking.max_missed_scans;
+    track.detect = detect;
+    (detect, select, track)
+}
+
 /// The planner's parameters from the configuration.
 pub fn planner_params(cfg: &Config) -> planner::PlannerParams {
     planner::PlannerParams {
@@ -743,6 +748,23 @@ mod tests {
             .with_evaluation(&truth)
             .run();
         (outcome, rec.drives)
+    }
+
+    #[test]
+    fn landmark_params_apply_the_configured_keys_to_detection_and_tracking() {
+        let mut cfg = Config::preset(Method::Goalseek);
+        cfg.landmarks.corners = true;
+        cfg.landmarks.max_bearing_deg = 30.0;
+        cfg.tracking.gate_m = 0.15;
+        let (detect, select, track) = landmark_params(&cfg);
+        assert!(detect.corners);
+        // The tracker detects with the same parameters as the leg's detection.
+        assert!(track.detect.corners);
+        assert_eq!(track.gate_m, 0.15);
+        assert!((select.max_bearing_rad - 30f64.to_radians()).abs() < 1e-15);
+        cfg.landmarks.corners = false;
+        let (detect, _, track) = landmark_params(&cfg);
+        assert!(!detect.corners && !track.detect.corners);
     }
 
     #[test]
