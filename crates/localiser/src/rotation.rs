@@ -125,18 +125,37 @@ enum Pair {
     Empty,
     /// One usable ray, or two max-range rays (the same reading).
     Single(Reading),
-    /// Two hits on one surface (ranges `r0`, `r1` within `SMOOTH_M`).
-    Smooth {
-        r0: f64,
-        r1: f64,
-        /// The segment between the two hit points in the frame of ray `j`: `(r1 cos inc -
-        /// r0, r1 sin inc)` and `r0` times its second coordinate.
-        dx: f64,
-        dy: f64,
-        num: f64,
-    },
+    /// Two hits on one surface (ranges within `SMOOTH_M`).
+    Smooth(Surface),
     /// A discontinuity between the two rays.
     Edge(Reading, Reading),
+}
+
+/// Two neighbouring hits `r0`, `r1` taken as the straight segment joining them.
+#[derive(Clone, Copy)]
+struct Surface {
+    r0: f64,
+    r1: f64,
+    /// The segment in the frame of the lower ray: `(r1 cos inc - r0, r1 sin inc)`, and `r0`
+    /// times its second coordinate.
+    dx: f64,
+    dy: f64,
+    num: f64,
+}
+
+impl Surface {
+    /// Range along the ray at `frac` of the way to the upper ray (`sp`, `cp`: sine and cosine
+    /// of `frac * inc`) to the segment; the interpolated range where the segment is degenerate.
+    #[inline]
+    fn range_at(&self, frac: f64, sp: f64, cp: f64) -> f64 {
+        let den = cp * self.dy - sp * self.dx;
+        let t = self.num / den;
+        if den.abs() > 1e-12 && t.is_finite() && t > 0.0 {
+            t
+        } else {
+            self.r0 + frac * (self.r1 - self.r0)
+        }
+    }
 }
 
 /// The [`Pair`]s of `before`: entry `j` pairs ray `j` with ray `min(j + 1, n - 1)`.
@@ -155,13 +174,13 @@ fn pairs(before: &[Option<Reading>], inc: f64) -> Vec<Pair> {
                         }
                         let (r0, r1) = (b0.range, b1.range);
                         let (dx, dy) = (r1 * ci - r0, r1 * si);
-                        Pair::Smooth {
+                        Pair::Smooth(Surface {
                             r0,
                             r1,
                             dx,
                             dy,
                             num: r0 * dy,
-                        }
+                        })
                     } else {
                         Pair::Edge(b0, b1)
                     }
@@ -180,22 +199,10 @@ fn at_rays(pairs: &[Pair], inc: f64) -> Vec<Pair> {
     pairs
         .iter()
         .map(|p| match *p {
-            Pair::Smooth {
-                r0,
-                r1,
-                dx,
-                dy,
-                num,
-            } => {
-                let den = cp * dy - sp * dx;
-                let t = num / den;
-                let range = if den.abs() > 1e-12 && t.is_finite() && t > 0.0 {
-                    t
-                } else {
-                    r0 + 0.0 * (r1 - r0)
-                };
-                Pair::Single(Reading { range, open: false })
-            }
+            Pair::Smooth(surface) => Pair::Single(Reading {
+                range: surface.range_at(0.0, sp, cp),
+                open: false,
+            }),
             other => other,
         })
         .collect()
@@ -231,23 +238,8 @@ fn cost(
         }
         // j >= 0: truncation is the floor (and needs no libm call).
         let d = match before[j as usize] {
-            Pair::Smooth {
-                r0,
-                r1,
-                dx,
-                dy,
-                num,
-            } => {
-                // Smooth stretch of hits: interpolate below one ray.
-                let den = cp * dy - sp * dx;
-                let t = num / den;
-                let b = if den.abs() > 1e-12 && t.is_finite() && t > 0.0 {
-                    t
-                } else {
-                    r0 + frac * (r1 - r0)
-                };
-                (a.range - b).abs()
-            }
+            // Smooth stretch of hits: interpolate below one ray.
+            Pair::Smooth(surface) => (a.range - surface.range_at(frac, sp, cp)).abs(),
             Pair::Edge(b0, b1) => {
                 // A discontinuity between the two rays: the ray may match either side.
                 let side = |b: Reading| {
