@@ -92,6 +92,9 @@ pub struct Navigator<'a, L: LaserSource, M: MotionBase + ?Sized> {
     path_length_m: f64,
     legs: usize,
     first_leg: Option<(WorldPoint, WorldPoint)>,
+    /// Where the robot stands and the hits seen from there (world frame) while it turns in
+    /// place: a replan there still knows what has left the field of view.
+    spot: (WorldPoint, Vec<WorldPoint>),
 }
 
 /// Bearing of the side rays.
@@ -136,6 +139,7 @@ impl<'a, L: LaserSource, M: MotionBase + ?Sized> Navigator<'a, L, M> {
             path_length_m: 0.0,
             legs: 0,
             first_leg: None,
+            spot: (start.position(), Vec::new()),
         }
     }
 
@@ -471,6 +475,32 @@ impl<'a, L: LaserSource, M: MotionBase + ?Sized> Navigator<'a, L, M> {
         select(&found, &all)
     }
 
+    /// Cuts each ray's clearance where the disc of radius `r` around a hit seen earlier from
+    /// this spot, now outside the field of view, enters it (the expansion's rule,
+    /// docs/expansion.md), then remembers the hits of `scan`. Without it a turn in place
+    /// forgets an obstacle right behind the robot and the next plan turns back into it.
+    fn block_by_spot_hits(&mut self, scan: &Scan, r: f64) {
+        let here = self.estimate.position();
+        if here.distance_m(&self.spot.0) > 1e-9 {
+            self.spot = (here, Vec::new());
+        }
+        block_by_unseen_hits(
+            &self.geometry,
+            &self.estimate,
+            &self.spot.1,
+            r,
+            &mut self.clearances,
+        );
+        // Only hits that can block a leg.
+        let reach = r + self.cfg.planner.max_leg_m;
+        let estimate = self.estimate;
+        self.spot.1.extend(
+            scan.robot_hits(&self.geometry)
+                .filter(|(_, p)| p.range_m() <= reach)
+                .map(|(_, p)| estimate.transform_point(p)),
+        );
+    }
+
     /// Runs the loop to the end.
     pub fn run(mut self) -> Outcome {
         let result = self.run_inner();
@@ -525,6 +555,7 @@ impl<'a, L: LaserSource, M: MotionBase + ?Sized> Navigator<'a, L, M> {
             // 2-3. Expand and plan.
             let r = self.cfg.robot.radius_m + self.cfg.robot.expansion_margin_m;
             self.expander.clearances(&scan, r, &mut self.clearances);
+            self.block_by_spot_hits(&scan, r);
             let half = (self.cfg.planner.width_window_deg.to_radians()
                 / self.geometry.increment_rad.abs())
             .ceil() as usize;
@@ -633,6 +664,37 @@ impl<'a, L: LaserSource, M: MotionBase + ?Sized> Navigator<'a, L, M> {
                 failures += 1;
             } else {
                 failures = 0;
+            }
+        }
+    }
+}
+
+/// Cuts `clearances` (one per ray of `geometry`, robot at `pose`) where the disc of radius `r`
+/// around a world point of `hits` outside the field of view enters the ray, by the expansion's
+/// rule (docs/expansion.md): a robot already inside a disc is blocked at 0 m on every ray
+/// within 90 deg of it. Hits inside the field of view are left to the scan.
+fn block_by_unseen_hits(
+    geometry: &ScanGeometry,
+    pose: &Pose2,
+    hits: &[WorldPoint],
+    r: f64,
+    clearances: &mut [f64],
+) {
+    let n = geometry.ray_count.min(clearances.len());
+    let last = (n.max(1) - 1) as f64;
+    let dirs = geometry.directions();
+    for w in hits {
+        let p = pose.inverse_transform_point(*w);
+        let f = geometry.fractional_index(p.bearing_rad());
+        if (0.0..=last).contains(&f) || p.range_m() == 0.0 {
+            continue;
+        }
+        for (c, u) in clearances[..n].iter_mut().zip(dirs.iter()) {
+            let tm = u[0] * p.x_m() + u[1] * p.y_m();
+            let side = u[0] * p.y_m() - u[1] * p.x_m();
+            let d = r * r - side * side;
+            if tm > 0.0 && d >= 0.0 {
+                *c = c.min((tm - d.sqrt()).max(0.0));
             }
         }
     }
@@ -768,6 +830,41 @@ mod tests {
     }
 
     #[test]
+    fn hits_outside_the_field_of_view_block_the_rays_toward_them() {
+        // Paper sensor: 240 deg, rays every 240/684 deg; robot at (1, 1) heading 90 deg.
+        let g = ScanGeometry::paper();
+        let pose = Pose2::new(1.0, 1.0, 90f64.to_radians());
+        let at = |x: f64, y: f64| pose.transform_point(scan_types::RobotPoint::new(x, y));
+        let mut c = vec![5.0; g.ray_count];
+        // Straight behind at 0.35 m (inside r = 0.4): every ray more than 90 deg off the
+        // heading is blocked at once, the others not at all.
+        block_by_unseen_hits(&g, &pose, &[at(-0.35, 0.0)], 0.4, &mut c);
+        for (i, &ci) in c.iter().enumerate() {
+            let b = g.bearing_rad(i).to_degrees();
+            if b.abs() > 90.0 + 1e-9 {
+                assert_eq!(ci, 0.0, "bearing {b}");
+            } else {
+                assert_eq!(ci, 5.0, "bearing {b}");
+            }
+        }
+        // (-0.5, -0.6) lies at bearing -129.8 deg, 0.781 m away, outside the view. The ray
+        // at -120 deg passes 0.133 m from it (0.5 * 0.6 - 0.866 * 0.5) and meets its 0.4 m
+        // disc at 0.5 * 0.5 + 0.866 * 0.6 - sqrt(0.16 - 0.133^2) = 0.392 m.
+        let mut c = vec![5.0; g.ray_count];
+        block_by_unseen_hits(&g, &pose, &[at(-0.5, -0.6)], 0.4, &mut c);
+        assert!((c[0] - 0.392).abs() < 1e-3, "{}", c[0]);
+        // The disc spans -129.8 +- asin(0.4 / 0.781) = 30.8 deg: up to -99.0 deg.
+        for (i, &ci) in c.iter().enumerate() {
+            let b = g.bearing_rad(i).to_degrees();
+            assert_eq!(ci < 5.0, b < -99.0, "bearing {b}: {ci}");
+        }
+        // Hits inside the field of view (bearings 26.6 and 116.6 deg) are the scan's business.
+        let mut c = vec![5.0; g.ray_count];
+        block_by_unseen_hits(&g, &pose, &[at(0.2, 0.1), at(-0.3, 0.6)], 0.4, &mut c);
+        assert!(c.iter().all(|&ci| ci == 5.0));
+    }
+
+    #[test]
     fn erosion_takes_the_narrowest_ray_of_the_window() {
         let c = [5.0, 4.0, 3.0, 9.0, 9.0, 9.0, 1.0];
         let mut out = Vec::new();
@@ -808,6 +905,29 @@ mod tests {
         let (_, drives) = run(World::paper(), &cfg, start, goal);
         assert!(drives.iter().any(|&d| d > 0.5), "{drives:?}");
         assert!(drives.iter().all(|&d| d <= 1.0 + 1e-9), "{drives:?}");
+    }
+
+    #[test]
+    fn a_box_left_behind_by_a_turn_in_place_is_not_turned_back_into() {
+        // The batch's random-3 pair 2 (default noise, seed 2). Without the hits remembered
+        // from the spot, the robot ended a leg 0.40 m from a box, turned so that the box left
+        // the view, planned into it, saw it after the turn (no room ahead), and turned away
+        // again: 8 failed tries, `unreachable` 4.33 m from the target.
+        let (world, _, _) =
+            crate::cmd::batch::generated_world(crate::cmd::batch::WorldKind::Random, 3).unwrap();
+        let opts = crate::simsetup::SimOptions {
+            seed: 2,
+            start: Pose2::new(5.05, -3.75, 24.326020170693653f64.to_radians()),
+            ..crate::simsetup::SimOptions::default()
+        };
+        let goal = WorldPoint::new(-1.65, 1.75);
+        let (mut laser, mut base, truth) = opts.build_in(Arc::new(world)).unwrap().split();
+        let cfg = Config::default();
+        let outcome = Navigator::new(&mut laser, &mut base, &cfg, opts.start, goal)
+            .with_evaluation(&truth)
+            .run();
+        assert_eq!(outcome.reason, Reason::Reached, "{}", outcome.note);
+        assert!(truth.pose().position().distance_m(&goal) < 0.3);
     }
 
     #[test]
