@@ -89,6 +89,9 @@ pub struct PlannerCfg {
     /// (the robot's width; the same window checks the way ahead after the rotation). 0 = the
     /// ray alone (the paper).
     pub width_window_deg: f64,
+    /// While the robot turns in place, hits seen earlier from the same spot that have left the
+    /// field of view still cut the rays' clearance (the paper: no memory).
+    pub remember_turned_away_hits: bool,
 }
 
 /// Where the distance driven on a leg comes from.
@@ -213,6 +216,7 @@ impl Config {
                 max_leg_m: 3.0,
                 grid_resolution_m: 0.1,
                 width_window_deg: 2.0,
+                remember_turned_away_hits: true,
             },
             landmarks: LandmarkCfg {
                 neighbour_n: 1,
@@ -253,6 +257,7 @@ impl Config {
                 c.robot.expansion_margin_m = 0.0;
                 c.planner.rule = PlanRuleCfg::Greedy;
                 c.planner.width_window_deg = 0.0;
+                c.planner.remember_turned_away_hits = false;
                 c.landmarks.range_limit_margin_m = 0.0;
                 c.tracking.gate_m = 0.2;
                 c.localiser.heading_rule = HeadingRuleCfg::Commanded;

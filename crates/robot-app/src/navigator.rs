@@ -555,7 +555,9 @@ impl<'a, L: LaserSource, M: MotionBase + ?Sized> Navigator<'a, L, M> {
             // 2-3. Expand and plan.
             let r = self.cfg.robot.radius_m + self.cfg.robot.expansion_margin_m;
             self.expander.clearances(&scan, r, &mut self.clearances);
-            self.block_by_spot_hits(&scan, r);
+            if self.cfg.planner.remember_turned_away_hits {
+                self.block_by_spot_hits(&scan, r);
+            }
             let half = (self.cfg.planner.width_window_deg.to_radians()
                 / self.geometry.increment_rad.abs())
             .ceil() as usize;
@@ -921,13 +923,23 @@ mod tests {
             ..crate::simsetup::SimOptions::default()
         };
         let goal = WorldPoint::new(-1.65, 1.75);
-        let (mut laser, mut base, truth) = opts.build_in(Arc::new(world)).unwrap().split();
-        let cfg = Config::default();
-        let outcome = Navigator::new(&mut laser, &mut base, &cfg, opts.start, goal)
-            .with_evaluation(&truth)
-            .run();
+        let world = Arc::new(world);
+        let run_with = |remember: bool| {
+            let (mut laser, mut base, truth) = opts.build_in(Arc::clone(&world)).unwrap().split();
+            let mut cfg = Config::default();
+            cfg.planner.remember_turned_away_hits = remember;
+            let outcome = Navigator::new(&mut laser, &mut base, &cfg, opts.start, goal)
+                .with_evaluation(&truth)
+                .run();
+            (outcome, truth.pose().position().distance_m(&goal))
+        };
+        let (outcome, left) = run_with(true);
         assert_eq!(outcome.reason, Reason::Reached, "{}", outcome.note);
-        assert!(truth.pose().position().distance_m(&goal) < 0.3);
+        assert!(left < 0.3, "{left}");
+        // The same run without the memory: the loop described above.
+        let (outcome, left) = run_with(false);
+        assert_eq!(outcome.reason, Reason::Unreachable, "{}", outcome.note);
+        assert!(left > 4.0, "{left}");
     }
 
     #[test]
