@@ -116,6 +116,15 @@ fn thinned_scan_points(log: &RunLog) -> Vec<(f64, f64)> {
     out
 }
 
+/// A path as separate two-point segments: a wide polyline's mitre join at a reversal (the
+/// robot backing out the way it came) would draw a spike far off the path.
+fn segments(points: &[(f64, f64)], style: ShapeStyle) -> Vec<PathElement<(f64, f64)>> {
+    points
+        .windows(2)
+        .map(|w| PathElement::new(vec![w[0], w[1]], style))
+        .collect()
+}
+
 fn draw<DB: DrawingBackend>(
     root: &DrawingArea<DB, Shift>,
     log: &RunLog,
@@ -158,7 +167,7 @@ fn draw<DB: DrawingBackend>(
         .collect();
     if !truth.is_empty() {
         chart
-            .draw_series(LineSeries::new(truth, RED.stroke_width(2)))
+            .draw_series(segments(&truth, RED.stroke_width(2)))
             .map_err(err)?
             .label("true path")
             .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], RED.stroke_width(2)));
@@ -169,7 +178,7 @@ fn draw<DB: DrawingBackend>(
         .map(|r| (r.estimate.x_m, r.estimate.y_m))
         .collect();
     chart
-        .draw_series(LineSeries::new(est.clone(), BLUE.stroke_width(2)))
+        .draw_series(segments(&est, BLUE.stroke_width(2)))
         .map_err(err)?
         .label("estimated path")
         .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], BLUE.stroke_width(2)));
@@ -286,6 +295,79 @@ mod tests {
         ] {
             assert!(svg.contains(label), "missing {label}");
         }
+    }
+
+    #[test]
+    fn a_path_that_turns_back_draws_no_spike() {
+        // True positions of the last 31 legs of a run that went back and forth in a dead end
+        // (generated world 9, pair 2): as one wide polyline, a join drew a line off the chart.
+        const TRUE: [(f64, f64); 31] = [
+            (-7.254, -1.541),
+            (-7.484, -1.393),
+            (-7.434, -1.8),
+            (-7.409, -1.322),
+            (-7.164, -1.48),
+            (-7.22, -1.519),
+            (-7.471, -1.703),
+            (-7.267, -1.555),
+            (-7.473, -1.391),
+            (-7.442, -1.786),
+            (-7.415, -1.325),
+            (-7.171, -1.482),
+            (-7.467, -1.654),
+            (-7.47, -1.426),
+            (-7.238, -1.55),
+            (-7.479, -1.72),
+            (-7.278, -1.568),
+            (-7.474, -1.365),
+            (-7.446, -1.797),
+            (-7.43, -1.32),
+            (-7.185, -1.482),
+            (-7.475, -1.678),
+            (-7.221, -1.513),
+            (-7.467, -1.398),
+            (-7.439, -1.807),
+            (-7.399, -1.318),
+            (-7.155, -1.491),
+            (-7.466, -1.624),
+            (-7.424, -1.315),
+            (-7.18, -1.488),
+            (-7.476, -1.644),
+        ];
+        // The estimate is drawn 1 m north of the truth: the same shape, whose ink gives the
+        // size the red ink must have.
+        let legs = TRUE
+            .iter()
+            .enumerate()
+            .map(|(k, &(x, y))| LegRecord {
+                leg: k,
+                estimate: Pose2::new(x, y + 1.0, 0.0),
+                truth: Some(Pose2::new(x, y, 0.0)),
+                landmark: None,
+                point_b: None,
+                scan_points: Vec::new(),
+            })
+            .collect();
+        let log = RunLog { goal: None, legs };
+        let png = render_png(&log, "reversals").unwrap();
+        let img = image::load_from_memory(&png).unwrap().to_rgb8();
+        // Width and height of the ink of colour `c`, outside the legend's box (top left).
+        let extent = |c: [u8; 3]| {
+            let (mut x0, mut x1, mut y0, mut y1) = (u32::MAX, 0, u32::MAX, 0);
+            for (x, y, p) in img.enumerate_pixels() {
+                if p.0 == c && !(x < 360 && y < 180) {
+                    (x0, x1, y0, y1) = (x0.min(x), x1.max(x), y0.min(y), y1.max(y));
+                }
+            }
+            assert!(x0 <= x1, "no ink of {c:?}");
+            (x1 - x0, y1 - y0)
+        };
+        let (blue, red) = (extent([0, 0, 255]), extent([255, 0, 0]));
+        // The blue path carries 3-pixel dots at its points; the red one does not.
+        assert!(
+            red.0 <= blue.0 + 2 && red.1 <= blue.1 + 2 && red.0 + 12 >= blue.0,
+            "red ink {red:?} against blue {blue:?} (pixels)"
+        );
     }
 
     #[test]
