@@ -566,13 +566,8 @@ mod tests {
 
     #[test]
     fn walk_equals_the_collected_path_but_its_end() {
-        let mut state = 7u64;
-        let mut uniform = || {
-            state = state
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            ((state >> 11) as f64) / ((1u64 << 53) as f64)
-        };
+        let mut noise = scan_types::testkit::Noise::new(7);
+        let mut uniform = || noise.uniform();
         let mut cases: Vec<(WorldPoint, WorldPoint)> = (0..3000)
             .map(|_| {
                 let a = WorldPoint::new(uniform() * 8.0 - 4.0, uniform() * 8.0 - 4.0);

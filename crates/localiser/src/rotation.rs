@@ -498,13 +498,8 @@ mod tests {
         // Ranges with smooth stretches, edges, max-range runs and error rays.
         let g = ScanGeometry::paper();
         let n = g.ray_count;
-        let mut state = 99u64;
-        let mut uniform = || {
-            state = state
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            ((state >> 11) as f64) / ((1u64 << 53) as f64)
-        };
+        let mut noise = scan_types::testkit::Noise::new(99);
+        let mut uniform = || noise.uniform();
         let mut scan = |shift: f64| {
             let ranges: Vec<f64> = (0..n)
                 .map(|i| {

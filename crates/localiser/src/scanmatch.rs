@@ -606,36 +606,22 @@ mod tests {
     /// Ray-casts `segments` from `pose` with the paper's geometry (no noise unless `noise`).
     fn cast(segments: &[[f64; 4]], pose: Pose2, noise: Option<u64>) -> Scan {
         let g = ScanGeometry::paper();
-        let mut state = noise.unwrap_or(0).wrapping_mul(6364136223846793005) | 1;
-        let mut uniform = || {
-            state = state
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            ((state >> 11) as f64) / ((1u64 << 53) as f64)
-        };
+        let walls: Vec<scan_types::testkit::Seg> = segments
+            .iter()
+            .map(|s| ((s[0], s[1]), (s[2], s[3])))
+            .collect();
+        let mut rng = scan_types::testkit::Noise::new(noise.unwrap_or(0));
         let ranges: Vec<f64> = (0..g.ray_count)
             .map(|i| {
                 let a = pose.theta_rad + g.bearing_rad(i);
-                let (dx, dy) = (a.cos(), a.sin());
-                let mut best = g.max_range_m;
-                for s in segments {
-                    let (ex, ey) = (s[2] - s[0], s[3] - s[1]);
-                    let den = dx * ey - dy * ex;
-                    if den.abs() < 1e-12 {
-                        continue;
-                    }
-                    let (wx, wy) = (s[0] - pose.x_m, s[1] - pose.y_m);
-                    let t = (wx * ey - wy * ex) / den;
-                    let u = (wx * dy - wy * dx) / den;
-                    if t > 0.0 && (0.0..=1.0).contains(&u) && t < best {
-                        best = t;
-                    }
-                }
+                let best = scan_types::testkit::raycast(&walls, pose.x_m, pose.y_m, a)
+                    .map_or(g.max_range_m, |t| t.min(g.max_range_m));
                 if noise.is_some() && best < g.max_range_m {
                     // Uniform noise of standard deviation 1 cm.
-                    best += (uniform() - 0.5) * 0.01 * 12f64.sqrt();
+                    best + (rng.uniform() - 0.5) * 0.01 * 12f64.sqrt()
+                } else {
+                    best
                 }
-                best
             })
             .collect();
         Scan::from_ranges(&g, &ranges, 0.0)
@@ -830,13 +816,8 @@ mod tests {
                 n: [1.0, 0.0],
             });
         }
-        let mut state = 12345u64;
-        let mut uniform = || {
-            state = state
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            ((state >> 11) as f64) / ((1u64 << 53) as f64)
-        };
+        let mut noise = scan_types::testkit::Noise::new(12345);
+        let mut uniform = || noise.uniform();
         for _ in 0..100 {
             let a = uniform() * std::f64::consts::TAU;
             t.points.push(Oriented {

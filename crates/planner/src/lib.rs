@@ -318,35 +318,20 @@ impl Planner {
         };
         // The scan cannot see obstacles just outside its field of view: a leg is also cut
         // where it enters an obstacle remembered from earlier scans.
-        let min_travel = self.params.min_travel_m;
         // Usually the best candidate passes: try it (the first of equal ones, as a stable sort
         // puts first) before sorting them all.
         let best = self.candidates.iter().copied().min_by(order);
-        if let Some((_, i, travel)) = best {
-            let travel = self.memory_cap_m(pose, geometry.bearing_rad(i), travel);
-            if travel >= min_travel && travel > 0.0 {
-                self.no_safe_tries = 0;
-                return Plan::Go {
-                    ray_index: i,
-                    alpha_rad: normalize_angle_rad(geometry.bearing_rad(i)),
-                    travel_m: travel,
-                    target_in_view: false,
-                };
-            }
+        let mut plan = best.and_then(|c| self.go_if_long_enough(pose, geometry, c));
+        if plan.is_none() {
+            self.candidates.sort_by(order);
+            plan = self
+                .candidates
+                .iter()
+                .find_map(|&c| self.go_if_long_enough(pose, geometry, c));
         }
-        self.candidates.sort_by(order);
-        for k in 0..self.candidates.len() {
-            let (_, i, travel) = self.candidates[k];
-            let travel = self.memory_cap_m(pose, geometry.bearing_rad(i), travel);
-            if travel >= min_travel && travel > 0.0 {
-                self.no_safe_tries = 0;
-                return Plan::Go {
-                    ray_index: i,
-                    alpha_rad: normalize_angle_rad(geometry.bearing_rad(i)),
-                    travel_m: travel,
-                    target_in_view: false,
-                };
-            }
+        if let Some(plan) = plan {
+            self.no_safe_tries = 0;
+            return plan;
         }
         self.no_safe_tries += 1;
         if self.no_safe_tries >= self.params.max_no_safe_tries {
@@ -355,6 +340,23 @@ impl Planner {
             };
         }
         Plan::NoSafeRay
+    }
+
+    /// `Plan::Go` along candidate `(score, ray, travel)` when its leg, cut by the remembered
+    /// obstacles, is still at least the shortest allowed.
+    fn go_if_long_enough(
+        &self,
+        pose: &Pose2,
+        geometry: &ScanGeometry,
+        (_, i, travel): (f64, usize, f64),
+    ) -> Option<Plan> {
+        let travel = self.memory_cap_m(pose, geometry.bearing_rad(i), travel);
+        (travel >= self.params.min_travel_m && travel > 0.0).then(|| Plan::Go {
+            ray_index: i,
+            alpha_rad: normalize_angle_rad(geometry.bearing_rad(i)),
+            travel_m: travel,
+            target_in_view: false,
+        })
     }
 
     /// How far along `bearing_rad` from `pose` (at most `travel_m`) the robot stays out of the

@@ -5,13 +5,12 @@ use std::f64::consts::{FRAC_PI_2, PI};
 
 use expansion::Expander;
 use planner::{Plan, PlanRule, Planner, PlannerParams};
+use scan_types::testkit::{self, Seg as Segment};
 use scan_types::{Pose2, Scan, ScanGeometry, WorldPoint, angle_diff_rad};
 
 const RADIUS_M: f64 = 0.3;
 const MARGIN_M: f64 = 0.1;
 
-/// A wall segment ((x0, y0), (x1, y1)).
-type Segment = ((f64, f64), (f64, f64));
 /// Wall segments.
 type World = Vec<Segment>;
 
@@ -27,40 +26,8 @@ fn room(extra: &[Segment]) -> World {
     w
 }
 
-/// Distance along the ray from (ox, oy) at `angle` to the nearest wall, if within `max_m`.
-fn raycast(world: &World, ox: f64, oy: f64, angle: f64, max_m: f64) -> Option<f64> {
-    let (ux, uy) = (angle.cos(), angle.sin());
-    let mut best: Option<f64> = None;
-    for &((ax, ay), (bx, by)) in world {
-        let (ex, ey) = (bx - ax, by - ay);
-        let den = ux * ey - uy * ex;
-        if den.abs() < 1e-12 {
-            continue;
-        }
-        let (wx, wy) = (ax - ox, ay - oy);
-        let t = (wx * ey - wy * ex) / den;
-        let s = (wx * uy - wy * ux) / den;
-        if t >= 0.0 && (0.0..=1.0).contains(&s) && t < max_m {
-            best = Some(best.map_or(t, |b: f64| b.min(t)));
-        }
-    }
-    best
-}
-
 fn scan_at(world: &World, g: &ScanGeometry, pose: &Pose2) -> Scan {
-    let ranges: Vec<f64> = (0..g.ray_count)
-        .map(|i| {
-            raycast(
-                world,
-                pose.x_m,
-                pose.y_m,
-                pose.theta_rad + g.bearing_rad(i),
-                g.max_range_m,
-            )
-            .unwrap_or(g.max_range_m)
-        })
-        .collect();
-    Scan::from_ranges(g, &ranges, 0.0)
+    testkit::scan_at(g, world, pose.x_m, pose.y_m, pose.theta_rad)
 }
 
 /// Distance from a point to the nearest wall.

@@ -53,7 +53,8 @@ impl Noise {
         Self(seed.wrapping_mul(6364136223846793005).wrapping_add(1))
     }
 
-    fn uniform(&mut self) -> f64 {
+    /// One sample uniform in [0, 1).
+    pub fn uniform(&mut self) -> f64 {
         self.0 = self
             .0
             .wrapping_mul(6364136223846793005)
