@@ -501,25 +501,9 @@ fn arm_into(
     params: &DetectParams,
     out: &mut Vec<RobotPoint>,
 ) -> usize {
-    let Some(r0) = seg[pos].hit else { return 0 };
-    let before = out.len();
-    let origin = seg[pos].pt;
-    let mut prev = r0;
-    let mut k = pos as isize + dir;
-    while k >= 0 && (k as usize) < seg.len() {
-        let ray = &seg[k as usize];
-        let Some(r) = ray.hit else { break };
-        if (r - prev).abs() > params.occlusion_jump_m {
-            break;
-        }
-        if beyond(&origin, &ray.pt, params.arm_m) {
-            break;
-        }
-        out.push(ray.pt);
-        prev = r;
-        k += dir;
-    }
-    out.len() - before
+    let n = arm_len(seg, pos, dir, params);
+    out.extend((1..=n as isize).map(|j| seg[(pos as isize + dir * j) as usize].pt));
+    n
 }
 
 /// How many hits [`arm_into`] would append from `pos` in direction `dir`.
