@@ -1,13 +1,14 @@
-//! One whole cycle of the goal-seeking loop (docs/method.md, "One cycle") on 685-ray scans of
-//! the paper's world, with the crates' public APIs called as `robot_app::navigator` calls them:
-//! expand, plan, measure the rotation, detect and select a landmark, triangle OBC, one tracking
-//! step, one scan match (the goalseek travel rule), map update (occupancy grid and planner
-//! memory). Goal: at most 0.5 ms per cycle. `cycle_step/*` times each step alone.
+//! The goal-seeking loop's cost per scan, and each of its steps alone.
 //!
-//! `cycle` alternates between two poses of the first leg (start and near B), so every cycle
-//! updates the maps; `cycle_new_field` also alternates the target, which forces the planner to
-//! recompute its path-length field every cycle (the worst case: on a real run the map grows
-//! every leg).
+//! `navigator/paper_run` feeds the scans of a whole simulated paper run (seed 0, default
+//! noise) to a fresh [`navigator::Navigator`] through its step API, answering every motion at
+//! once: the navigator's real cycle (expand, plan, measure each rotation, detect and select
+//! landmarks, triangle OBC, track, scan-match, map), with no simulator in the timing. Its
+//! throughput is scans per second; the time per scan is the median divided by the scan count
+//! printed at the start. Goal: at most 0.5 ms per scan.
+//!
+//! `cycle_step/*` times each step alone on 685-ray scans of the paper world, with the
+//! parameters the navigator derives from the goalseek preset.
 //!
 //! Run: `cargo bench --bench cycle -- --quick`.
 #![allow(clippy::print_stderr, clippy::print_stdout)] // benches and tests report to the terminal
@@ -15,12 +16,13 @@
 use std::hint::black_box;
 use std::sync::Arc;
 
-use criterion::{Criterion, criterion_group, criterion_main};
+use criterion::{BatchSize, Criterion, Throughput, criterion_group, criterion_main};
 use expansion::Expander;
-use landmarks::{DetectParams, SelectParams, TrackParams, Tracker, detect, select};
+use landmarks::{Tracker, detect, select};
 use localiser::OccupancyGrid;
-use planner::{Plan, Planner};
-use robot_app::config::{Config, Method, TravelRuleCfg};
+use navigator::{Action, Monitor, Navigator, Params};
+use planner::Planner;
+use robot_app::simsetup::{paper_start, paper_target};
 use scan_types::{LaserSource, Pose2, Scan, ScanGeometry, WorldPoint};
 use sim_laser::{MotionNoise, SensorPreset, Simulation, World};
 
@@ -69,145 +71,100 @@ fn stops(g: &ScanGeometry) -> Vec<Stop> {
         .collect()
 }
 
-/// The loop's per-run state, set up as `Navigator::new` does for the goalseek preset.
-struct Cycle {
-    cfg: Config,
-    g: ScanGeometry,
-    expander: Expander,
-    clearances: Vec<f64>,
-    planner: Planner,
-    grid: OccupancyGrid,
-    detect: DetectParams,
-    select: SelectParams,
-    track: TrackParams,
+/// Keeps every scan the navigator accepted.
+#[derive(Default)]
+struct Scans(Vec<Scan>);
+
+impl Monitor for Scans {
+    fn scan(&mut self, scan: &Scan, _estimate: &Pose2) {
+        self.0.push(scan.clone());
+    }
 }
 
-impl Cycle {
-    fn new(g: ScanGeometry) -> Self {
-        let cfg = Config::preset(Method::Goalseek);
-        let (detect, select, track) = robot_app::navigator::landmark_params(&cfg);
-        Self {
-            expander: Expander::new(&g),
-            clearances: vec![0.0; g.ray_count],
-            planner: Planner::new(robot_app::navigator::planner_params(&cfg)),
-            grid: OccupancyGrid::new(cfg.localiser.map_resolution_m),
-            cfg,
-            g,
-            detect,
-            select,
-            track,
-        }
-    }
+/// The scans of the simulated paper run, seed 0, in the order the navigator took them.
+fn paper_run_scans() -> Vec<Scan> {
+    let preset = SensorPreset::Paper;
+    let params = Params::goalseek();
+    let sim = Simulation::new(
+        Arc::new(World::paper()),
+        preset,
+        preset.default_noise(),
+        MotionNoise::default(),
+        params.robot.radius_m,
+        paper_start(),
+        0,
+    );
+    let (mut laser, mut base, _truth) = sim.split();
+    let nav = Navigator::new(params, *laser.geometry(), paper_start(), paper_target()).unwrap();
+    let mut scans = Scans::default();
+    let outcome = navigator::run(nav, &mut laser, &mut base, &mut scans);
+    assert_eq!(
+        outcome.reason,
+        navigator::Reason::Reached,
+        "{}",
+        outcome.note
+    );
+    scans.0
+}
 
-    /// One cycle at `s` toward `target`; returns something derived from every step.
-    fn run(&mut self, s: &Stop, target: WorldPoint) -> f64 {
-        let g = &self.g;
-        // Expand and plan.
-        let r = self.cfg.robot.radius_m + self.cfg.robot.expansion_margin_m;
-        self.expander.clearances(&s.before, r, &mut self.clearances);
-        let plan = self
-            .planner
-            .plan(&s.pose, g, &s.before, &self.clearances, target);
-        let alpha = match plan {
-            Plan::Go { alpha_rad, .. } => alpha_rad,
-            _ => 0.0,
+/// Feeds `scans` to `nav`, every motion done at once; returns the legs driven.
+fn replay(mut nav: Navigator, scans: &[Scan]) -> usize {
+    let mut next = scans.iter();
+    let mut action = nav.pending();
+    loop {
+        action = match action {
+            Action::Scan => match next.next() {
+                Some(s) => nav.on_scan(s),
+                None => break,
+            },
+            Action::Rotate { .. } | Action::Forward { .. } => nav.on_motion_done(),
+            Action::Finish(_) => break,
         };
-        // Rotate: measure the rotation on the scans, clearance ahead after it.
-        let turned = localiser::measure_rotation(
-            g,
-            &s.before,
-            &s.after,
-            TURN_RAD,
-            self.cfg.localiser.rotation_search_deg.to_radians(),
-        )
-        .unwrap_or(TURN_RAD);
-        self.expander.clearances(&s.after, r, &mut self.clearances);
-        // Landmarks in front, the nearest usable one, triangle OBC.
-        let found = detect(g, &s.after, &self.detect);
-        let mut out = alpha + turned + found.len() as f64;
-        if let Some(lm) = select(&found, &self.select) {
-            let tri = localiser::triangle(&s.pose, lm.range_m, lm.bearing_rad);
-            out += tri.point_b.x_m();
-            // One tracking step while driving to B.
-            let mut tracker = Tracker::new(lm, self.track);
-            out += match tracker.update(g, &s.stepped, 0.05) {
-                landmarks::TrackUpdate::Tracked(l) => l.range_m,
-                _ => 0.0,
-            };
-        }
-        // Scan-matched travel (goalseek's default travel rule): the reference scan and one
-        // alignment, as each keyframe of a drive does.
-        if self.cfg.localiser.travel_rule == TravelRuleCfg::ScanMatched {
-            let params = localiser::MatchParams::default();
-            let mut reference = localiser::MatchTarget::from_scan(g, &s.after, &params);
-            let guess = Pose2::new(0.05, 0.0, 0.0);
-            if let Some(m) = reference.align(g, &s.stepped, guess, &params) {
-                out += m.pose.x_m;
-            }
-        }
-        // Map with the localised scan.
-        self.grid.integrate(&s.pose, g, &s.stepped);
-        self.planner.add_scan(&s.pose, g, &s.stepped);
-        out
     }
+    nav.into_outcome().legs_driven
 }
 
 fn bench_cycle(c: &mut Criterion) {
     let g = ScanGeometry::paper();
     assert_eq!(g.ray_count, 685);
-    let stops = stops(&g);
-    let target = WorldPoint::new(4.0, 4.0);
-    let other = WorldPoint::new(3.0, 4.0);
-    let mut group = c.benchmark_group("cycle");
-
-    let mut cycle = Cycle::new(g);
-    // Sanity: the first stop selects a landmark and the planner finds a way.
-    assert!(!detect(&g, &stops[0].after, &cycle.detect).is_empty());
-    let mut k = 0usize;
-    group.bench_function("cycle", |b| {
-        b.iter(|| {
-            k += 1;
-            black_box(cycle.run(&stops[k % 2], target))
-        })
-    });
-
-    let mut cycle = Cycle::new(g);
-    let mut k = 0usize;
-    group.bench_function("cycle_new_field", |b| {
-        b.iter(|| {
-            k += 1;
-            let t = if (k / 2).is_multiple_of(2) {
-                target
-            } else {
-                other
-            };
-            black_box(cycle.run(&stops[k % 2], t))
-        })
+    let scans = paper_run_scans();
+    let new = || Navigator::new(Params::goalseek(), g, paper_start(), paper_target()).unwrap();
+    // The replay drives the same run: every recorded scan is used.
+    let legs = replay(new(), &scans);
+    println!("paper run: {} scans, {legs} legs", scans.len());
+    let mut group = c.benchmark_group("navigator");
+    group.throughput(Throughput::Elements(scans.len() as u64));
+    group.bench_function("paper_run", |b| {
+        b.iter_batched(
+            new,
+            |nav| black_box(replay(nav, &scans)),
+            BatchSize::SmallInput,
+        )
     });
     group.finish();
 
+    let cfg = Params::goalseek();
+    let (detect_p, select_p, track_p) = cfg.landmark_params();
+    let stops = stops(&g);
+    let target = WorldPoint::new(4.0, 4.0);
+    let mut expander = Expander::new(&g);
+    let mut clearances = vec![0.0; g.ray_count];
+    let mut planner = Planner::new(cfg.planner_params());
+    let mut grid = OccupancyGrid::new(cfg.localiser.map_resolution_m);
+    for s in &stops {
+        grid.integrate(&s.pose, &g, &s.stepped);
+        planner.add_scan(&s.pose, &g, &s.stepped);
+    }
+
     // Each step alone, to see where a cycle's time goes.
     let mut steps = c.benchmark_group("cycle_step");
-    let mut cy = Cycle::new(g);
-    for _ in 0..4 {
-        cy.run(&stops[0], target);
-        cy.run(&stops[1], target);
-    }
     let s = &stops[0];
-    let r = cy.cfg.robot.radius_m + cy.cfg.robot.expansion_margin_m;
+    let r = cfg.expansion_radius_m();
     steps.bench_function("expand", |b| {
-        b.iter(|| {
-            cy.expander
-                .clearances(black_box(&s.before), r, &mut cy.clearances)
-        })
+        b.iter(|| expander.clearances(black_box(&s.before), r, &mut clearances))
     });
     steps.bench_function("plan", |b| {
-        b.iter(|| {
-            black_box(
-                cy.planner
-                    .plan(&s.pose, &g, &s.before, &cy.clearances, target),
-            )
-        })
+        b.iter(|| black_box(planner.plan(&s.pose, &g, &s.before, &clearances, target)))
     });
     steps.bench_function("measure_rotation", |b| {
         b.iter(|| {
@@ -216,16 +173,16 @@ fn bench_cycle(c: &mut Criterion) {
                 &s.before,
                 &s.after,
                 TURN_RAD,
-                cy.cfg.localiser.rotation_search_deg.to_radians(),
+                cfg.localiser.rotation_search_deg.to_radians(),
             ))
         })
     });
     steps.bench_function("detect_select", |b| {
-        b.iter(|| black_box(select(&detect(&g, &s.after, &cy.detect), &cy.select)))
+        b.iter(|| black_box(select(&detect(&g, &s.after, &detect_p), &select_p)))
     });
-    let lm = select(&detect(&g, &s.after, &cy.detect), &cy.select).expect("a landmark");
+    let lm = select(&detect(&g, &s.after, &detect_p), &select_p).expect("a landmark");
     steps.bench_function("track_step", |b| {
-        b.iter(|| black_box(Tracker::new(lm, cy.track).update(&g, &s.stepped, 0.05)))
+        b.iter(|| black_box(Tracker::new(lm, track_p).update(&g, &s.stepped, 0.05)))
     });
     let mp = localiser::MatchParams::default();
     steps.bench_function("scan_match", |b| {
@@ -235,10 +192,10 @@ fn bench_cycle(c: &mut Criterion) {
         })
     });
     steps.bench_function("grid_integrate", |b| {
-        b.iter(|| black_box(cy.grid.integrate(&s.pose, &g, &s.stepped)))
+        b.iter(|| black_box(grid.integrate(&s.pose, &g, &s.stepped)))
     });
     steps.bench_function("planner_add_scan", |b| {
-        b.iter(|| cy.planner.add_scan(&s.pose, &g, black_box(&s.stepped)))
+        b.iter(|| planner.add_scan(&s.pose, &g, black_box(&s.stepped)))
     });
     steps.finish();
 }

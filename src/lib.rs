@@ -6,6 +6,7 @@
 pub use expansion;
 pub use landmarks;
 pub use localiser;
+pub use navigator;
 pub use planner;
 pub use scan_log;
 pub use scan_types;

@@ -18,7 +18,17 @@ fn allowed() -> BTreeMap<&'static str, BTreeSet<&'static str>> {
         "planner",
         "landmarks",
         "localiser",
+        "navigator",
     ];
+    const METHOD: &[&str] = &[
+        "scan-types",
+        "expansion",
+        "planner",
+        "landmarks",
+        "localiser",
+    ];
+    let mut with_app = all.to_vec();
+    with_app.push("robot-app");
     let table: &[(&str, &[&str])] = &[
         // Layer 0.
         ("scan-types", &[]),
@@ -27,27 +37,16 @@ fn allowed() -> BTreeMap<&'static str, BTreeSet<&'static str>> {
         ("sim-laser", BOTTOM),
         ("scan-log", BOTTOM),
         ("expansion", BOTTOM),
-        // Layer 2: the method. Sideways edges: localiser -> landmarks (it localises on a
-        // tracked landmark), planner -> localiser (it plans over the map the localiser builds).
+        // Layer 2: the method's parts, each on scan-types; the planner chooses among rays
+        // made safe by the expansion kernel.
         ("landmarks", &["scan-types"]),
-        ("localiser", &["scan-types", "landmarks"]),
-        ("planner", &["scan-types", "expansion", "localiser"]),
-        // Layer 3: the program, and the root package that owns tests/ and benches/.
+        ("localiser", &["scan-types"]),
+        ("planner", &["scan-types", "expansion"]),
+        // Layer 3: the loop, on the method's parts only (no sensor, simulator or log).
+        ("navigator", METHOD),
+        // Layer 4: the program, and the root package that owns tests/ and benches/.
         ("robot-app", &all),
-        (
-            "goalseek",
-            &[
-                "scan-types",
-                "urg-driver",
-                "sim-laser",
-                "scan-log",
-                "expansion",
-                "planner",
-                "landmarks",
-                "localiser",
-                "robot-app",
-            ],
-        ),
+        ("goalseek", &with_app),
     ];
     table
         .iter()
@@ -116,6 +115,55 @@ fn every_edge_is_allowed() {
         }
     }
     assert!(bad.is_empty(), "layering violations:\n{}", bad.join("\n"));
+}
+
+/// The loop as a library carries no sensor, simulator, log, CLI, plotting, threading or
+/// serial crate, directly or through another crate (dev-dependencies included).
+#[test]
+fn the_navigator_pulls_in_no_program_crate() {
+    let out = Command::new(env!("CARGO"))
+        .args([
+            "tree",
+            "-p",
+            "navigator",
+            "--edges",
+            "normal,build,dev",
+            "--prefix",
+            "none",
+            "--offline",
+        ])
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .expect("cargo tree runs");
+    assert!(
+        out.status.success(),
+        "cargo tree failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    let names: BTreeSet<&str> = text
+        .lines()
+        .filter_map(|l| l.split_whitespace().next())
+        .collect();
+    assert!(
+        names.contains("navigator") && names.contains("planner"),
+        "{text}"
+    );
+    for banned in [
+        "sim-laser",
+        "urg-driver",
+        "scan-log",
+        "robot-app",
+        "clap",
+        "plotters",
+        "rayon",
+        "serialport",
+    ] {
+        assert!(
+            !names.contains(banned),
+            "navigator depends on {banned}:\n{text}"
+        );
+    }
 }
 
 #[test]

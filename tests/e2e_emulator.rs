@@ -11,8 +11,8 @@
 
 use std::sync::Arc;
 
-use robot_app::config::{Config, Method};
-use robot_app::navigator::{Navigator, Outcome};
+use navigator::{Method, Params};
+use robot_app::runloop::{LoopRun, run_loop};
 use robot_app::simsetup::{paper_start, paper_target};
 use scan_types::{LaserSource, MotionBase, RayStatus, Scan, ScanGeometry};
 use sim_laser::{MotionNoise, SensorPreset, Simulation, TruthHandle, World};
@@ -76,8 +76,8 @@ impl<M: MotionBase> MotionBase for Recording<M> {
     }
 }
 
-fn config() -> Config {
-    let mut c = Config::preset(Method::Goalseek);
+fn config() -> Params {
+    let mut c = Params::preset(Method::Goalseek);
     // Enough legs to cover several landmark fixes; keeps the test short.
     c.navigator.max_legs = 8;
     c
@@ -97,7 +97,7 @@ fn simulation(world: &Arc<World>, seed: u64) -> Simulation {
 }
 
 struct Run {
-    outcome: Outcome,
+    run: LoopRun,
     commands: Vec<(char, f64)>,
     scans_cast: u64,
     geometry: ScanGeometry,
@@ -110,11 +110,17 @@ fn drive<L: LaserSource>(laser: &mut L, base: sim_laser::SimBase, truth: &TruthH
         commands: Vec::new(),
     };
     let cfg = config();
-    let outcome = Navigator::new(laser, &mut base, &cfg, paper_start(), paper_target())
-        .with_evaluation(truth)
-        .run();
+    let run = run_loop(
+        laser,
+        &mut base,
+        &cfg,
+        (paper_start(), paper_target()),
+        Some(truth),
+        None,
+    )
+    .unwrap();
     Run {
-        outcome,
+        run,
         commands: base.commands,
         scans_cast: truth.scans_taken(),
         geometry,
@@ -165,16 +171,22 @@ fn through_pty(world: &Arc<World>, seed: u64) -> Run {
 
 fn assert_same_legs(a: &Run, b: &Run, what: &str) {
     assert_eq!(a.geometry, b.geometry, "{what}: scan geometry");
-    assert_eq!(a.outcome.reason, b.outcome.reason, "{what}: end reason");
-    assert_eq!(a.outcome.legs, b.outcome.legs, "{what}: legs");
-    assert_eq!(a.outcome.scans, b.outcome.scans, "{what}: scans");
+    assert_eq!(
+        a.run.outcome.reason, b.run.outcome.reason,
+        "{what}: end reason"
+    );
+    assert_eq!(
+        a.run.outcome.legs_driven, b.run.outcome.legs_driven,
+        "{what}: legs"
+    );
+    assert_eq!(a.run.outcome.scans, b.run.outcome.scans, "{what}: scans");
     // The emulator asked the simulator for exactly one scan per GD.
     assert_eq!(a.scans_cast, b.scans_cast, "{what}: scans cast");
     assert_eq!(a.commands.len(), b.commands.len(), "{what}: commands");
     for (i, (x, y)) in a.commands.iter().zip(&b.commands).enumerate() {
         assert_eq!(x, y, "{what}: command {i}");
     }
-    let (la, lb) = (&a.outcome.log.legs, &b.outcome.log.legs);
+    let (la, lb) = (&a.run.log.legs, &b.run.log.legs);
     assert_eq!(la.len(), lb.len(), "{what}: leg records");
     for (x, y) in la.iter().zip(lb) {
         let leg = x.leg;
@@ -197,7 +209,7 @@ fn emulated_hokuyo_gives_the_same_legs_as_the_direct_simulator() {
         assert_eq!(emulated.geometry, SensorPreset::Urg04lx.geometry());
         assert_eq!(emulated.geometry.ray_count, 725 - 44 + 1);
         let fixes = direct_run
-            .outcome
+            .run
             .log
             .legs
             .iter()
@@ -205,13 +217,13 @@ fn emulated_hokuyo_gives_the_same_legs_as_the_direct_simulator() {
             .count();
         println!(
             "seed {seed}: {} legs ({fixes} landmark fixes), {} scans, {} commands, {}",
-            direct_run.outcome.legs,
-            direct_run.outcome.scans,
+            direct_run.run.outcome.legs_driven,
+            direct_run.run.outcome.scans,
             direct_run.commands.len(),
-            direct_run.outcome.reason
+            direct_run.run.outcome.reason
         );
         // Something to compare: the runs drove and fixed landmarks.
-        assert!(direct_run.outcome.legs >= 2 && fixes >= 1);
+        assert!(direct_run.run.outcome.legs_driven >= 2 && fixes >= 1);
         assert_same_legs(&direct_run, &emulated, &format!("seed {seed}"));
 
         if seed == 0 {

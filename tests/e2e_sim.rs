@@ -9,8 +9,8 @@ use std::ffi::OsStr;
 use std::path::Path;
 
 use clap::Parser;
+use navigator::{Method, Params};
 use robot_app::cmd::sim::{SimArgs, SimSpec, simulate, write_outputs};
-use robot_app::config::{Config, Method};
 
 /// `robot-app sim`'s arguments on their own.
 #[derive(Parser)]
@@ -84,8 +84,8 @@ fn check_summary_fields(s: &serde_json::Value) {
 
 #[test]
 fn paper_scenario_reaches_the_target_and_writes_every_output() {
-    let spec = SimSpec::paper(0, Config::preset(Method::Goalseek));
-    let run = simulate(&spec, None);
+    let spec = SimSpec::paper(0, Params::preset(Method::Goalseek));
+    let run = simulate(&spec, None).unwrap();
     let dir = tempfile::tempdir().unwrap();
     write_outputs(dir.path(), &run, "e2e").expect("outputs written");
     let d = dir.path();
@@ -221,12 +221,12 @@ fn a_run_stopped_by_the_leg_limit_leaves_its_summary() {
 /// collision, as unreachable or at the leg limit, and says so in its summary.
 #[test]
 fn a_target_beyond_the_walls_ends_as_a_failure_with_its_reason() {
-    let mut config = Config::preset(Method::Goalseek);
+    let mut config = Params::preset(Method::Goalseek);
     config.navigator.max_legs = 12;
     let mut spec = SimSpec::paper(1, config);
     // The paper world spans -5..5 m with a wall around it.
     spec.goal = scan_types::WorldPoint::new(7.0, 0.0);
-    let run = simulate(&spec, None);
+    let run = simulate(&spec, None).unwrap();
     let dir = tempfile::tempdir().unwrap();
     write_outputs(dir.path(), &run, "e2e unreachable").unwrap();
     let s = summary(dir.path());

@@ -9,18 +9,17 @@
 use robot_app::cmd::replay::{ReplayArgs, run_to};
 use robot_app::cmd::scan::ScanFormat;
 use robot_app::cmd::sim::{SimSpec, record_run};
-use robot_app::config::Config;
-use robot_app::navigator::Navigator;
 use robot_app::outputs::Reason;
 use robot_app::record::{
     LEGS_METADATA, LoggingBase, RUN_METADATA, Recorder, RunSettings, leg_summaries, replay_loop,
 };
+use robot_app::runloop::run_loop;
 use scan_log::read_mcap;
 use scan_types::{Pose2, Scan};
 use sim_laser::{MotionNoise, Simulation};
 
 fn paper_spec() -> SimSpec {
-    SimSpec::paper(0, Config::load(None, None).unwrap())
+    SimSpec::paper(0, robot_app::config::load(None, None).unwrap())
 }
 
 fn settings_of(spec: &SimSpec) -> RunSettings {
@@ -93,14 +92,20 @@ fn replayed_paper_run_gives_the_same_commands_and_legs() {
         rec.record_scan(&geometry, s, Some(t), Some(*e)).unwrap();
         written.push((s.clone(), t, *e));
     };
-    let live = Navigator::new(&mut laser, &mut base, cfg, spec.start, spec.goal)
-        .with_evaluation(&truth)
-        .with_scan_pose_hook(&mut hook)
-        .run();
+    let live_run = run_loop(
+        &mut laser,
+        &mut base,
+        cfg,
+        (spec.start, spec.goal),
+        Some(&truth),
+        Some(&mut hook),
+    )
+    .unwrap();
+    let live = &live_run.outcome;
     rec.finish().unwrap();
     // A collision ends a live run on the simulator's count, which a recording does not hold.
     assert_ne!(live.reason, Reason::Collision, "{}", live.note);
-    assert!(live.legs >= 2, "{} legs", live.legs);
+    assert!(live.legs_driven >= 2, "{} legs", live.legs_driven);
     assert_eq!(written.len(), live.scans);
 
     // The recording reads back bit for bit: scans, true poses, estimates.
@@ -133,15 +138,15 @@ fn replayed_paper_run_gives_the_same_commands_and_legs() {
     println!(
         "{} scans, {} legs; worst estimate error at a scan {worst:.3} m",
         written.len(),
-        live.legs
+        live.legs_driven
     );
 
     // Replay through the loop.
     let replay = replay_loop(&path, cfg, spec.start, spec.goal).unwrap();
-    let r = &replay.outcome;
+    let r = &replay.run.outcome;
     assert_eq!(replay.commands, base.commands, "commanded motion");
     assert_eq!(r.reason, live.reason);
-    assert_eq!(r.legs, live.legs);
+    assert_eq!(r.legs_driven, live.legs_driven);
     assert_eq!(r.scans, live.scans);
     assert_eq!(replay.scans_read, live.scans);
     assert_eq!(replay.scans_left, 0);
@@ -149,7 +154,7 @@ fn replayed_paper_run_gives_the_same_commands_and_legs() {
     assert_eq!(pose_bits(r.estimate), pose_bits(live.estimate));
     assert_eq!(r.first_leg, live.first_leg);
     // Every leg: estimate, recorded truth, landmark, point B and the scan's world points.
-    assert_eq!(r.log, live.log);
+    assert_eq!(replay.run.log, live_run.log);
 }
 
 /// The `robot-app sim --record` path and `robot-app replay FILE --loop`.
@@ -180,7 +185,7 @@ fn sim_record_then_replay_loop_reports_the_same_legs() {
     );
     // The true pose of the scan a leg ended on is the truth the run logged for that leg.
     let last = records.last().unwrap();
-    let logged = live.outcome.log.legs.last().unwrap();
+    let logged = live.log.legs.last().unwrap();
     assert_eq!(last.true_pose, logged.truth);
 
     let mut out = Vec::new();
@@ -194,7 +199,7 @@ fn sim_record_then_replay_loop_reports_the_same_legs() {
     );
 
     // A recording whose legs differ in one bit is reported as different.
-    let mut legs = leg_summaries(&live.outcome.log);
+    let mut legs = leg_summaries(&live.log);
     let b = legs.iter_mut().find_map(|l| l.point_b.as_mut()).unwrap();
     b[0] = f64::from_bits(b[0].to_bits() + 1);
     let bad = dir.path().join("bad.mcap");

@@ -9,33 +9,7 @@ use anyhow::Context;
 use scan_types::{Pose2, WorldPoint, angle_diff_rad};
 use serde::{Deserialize, Serialize};
 
-/// Why a run ended.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Reason {
-    /// The estimate reached the target within tolerance.
-    Reached,
-    /// No way toward the target was found after the bounded number of tries.
-    Unreachable,
-    /// The leg limit was hit first.
-    LegLimit,
-    /// The robot touched an obstacle (simulator).
-    Collision,
-    /// The laser or the base failed.
-    SensorFailure,
-}
-
-impl std::fmt::Display for Reason {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(match self {
-            Reason::Reached => "reached",
-            Reason::Unreachable => "unreachable",
-            Reason::LegLimit => "leg_limit",
-            Reason::Collision => "collision",
-            Reason::SensorFailure => "sensor_failure",
-        })
-    }
-}
+pub use navigator::Reason;
 
 /// `summary.json`: the outcome of one run.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

@@ -13,9 +13,9 @@ use anyhow::Context;
 use scan_log::{LogOptions, LogSource, McapRecorder};
 use scan_types::{LaserSource, MotionBase, Pose2, Scan, ScanGeometry, WorldPoint};
 
-use crate::config::Config;
-use crate::navigator::{Evaluation, Navigator, Outcome};
+use crate::config::Params;
 use crate::outputs::RunLog;
+use crate::runloop::{Evaluation, LoopRun, run_loop};
 
 /// Records scans (and poses) to a goalseek MCAP file that Foxglove opens as it is.
 pub struct Recorder {
@@ -212,7 +212,7 @@ pub struct RunSettings {
     /// Target.
     pub goal: WorldPoint,
     /// Tuning of the loop.
-    pub config: Config,
+    pub config: Params,
     /// World name (information only).
     pub world: String,
     /// Sensor preset name (information only).
@@ -257,7 +257,7 @@ impl RunSettings {
     pub fn from_metadata(m: &BTreeMap<String, String>) -> anyhow::Result<Self> {
         let [x_m, y_m, theta_rad]: [f64; 3] = json_field(m, "start")?;
         let [gx, gy]: [f64; 2] = json_field(m, "goal")?;
-        let config: Config = json_field(m, "config")?;
+        let config: Params = json_field(m, "config")?;
         config.validate()?;
         Ok(Self {
             start: Pose2 {
@@ -470,8 +470,8 @@ impl Evaluation for RecordedTruth {
 
 /// A recording replayed through the loop.
 pub struct LoopReplay {
-    /// The loop's outcome.
-    pub outcome: Outcome,
+    /// The loop's outcome and leg rows.
+    pub run: LoopRun,
     /// The commands the loop gave (executed by nothing).
     pub commands: Vec<Command>,
     /// Scans of the recording the loop read.
@@ -484,16 +484,21 @@ pub struct LoopReplay {
 /// base that executes nothing, the recorded true poses standing in for the simulator's truth.
 pub fn replay_loop(
     path: &Path,
-    config: &Config,
+    config: &Params,
     start: Pose2,
     goal: WorldPoint,
 ) -> anyhow::Result<LoopReplay> {
     let source = open_log(path, None)?;
     let (mut laser, truth) = RecordedLaser::new(source);
     let mut base = LoggingBase::new(NoMotion);
-    let outcome = Navigator::new(&mut laser, &mut base, config, start, goal)
-        .with_evaluation(&truth)
-        .run();
+    let run = run_loop(
+        &mut laser,
+        &mut base,
+        config,
+        (start, goal),
+        Some(&truth),
+        None,
+    )?;
     let scans_read = laser.source().scans_read();
     let mut scans_left = 0;
     let mut rest = laser.source;
@@ -501,7 +506,7 @@ pub fn replay_loop(
         scans_left += 1;
     }
     Ok(LoopReplay {
-        outcome,
+        run,
         commands: base.commands,
         scans_read,
         scans_left,

@@ -14,7 +14,7 @@ use serde::Serialize;
 use sim_laser::{GenParams, SensorPreset, World, generate_world};
 
 use super::sim::{SimSpec, load_world, simulate};
-use crate::config::{Config, Method};
+use crate::config::{Method, Params};
 use crate::outputs::{Reason, write_atomic};
 
 /// Arguments of `robot-app batch`.
@@ -496,9 +496,9 @@ pub fn run(args: BatchArgs) -> anyhow::Result<()> {
     } else {
         args.method.clone()
     };
-    let configs: Vec<Config> = methods
+    let configs: Vec<Params> = methods
         .iter()
-        .map(|m| Config::load(args.config.as_deref(), Some(*m)))
+        .map(|m| crate::config::load(args.config.as_deref(), Some(*m)))
         .collect::<anyhow::Result<_>>()?;
     let own_scenario = args.scenarios != "pairs";
     let pairs = args.scenarios != "paper";
@@ -580,7 +580,7 @@ pub fn run(args: BatchArgs) -> anyhow::Result<()> {
             WorldKind::File => w.name.clone(),
             k => k.to_string(),
         };
-        let spec = |start: Pose2, goal: WorldPoint, seed: u64, cfg: &Config| SimSpec {
+        let spec = |start: Pose2, goal: WorldPoint, seed: u64, cfg: &Params| SimSpec {
             world: w.world.clone(),
             world_name: w.name.clone(),
             start,
@@ -647,7 +647,7 @@ pub fn run(args: BatchArgs) -> anyhow::Result<()> {
     let rows: Vec<anyhow::Result<BatchRow>> = pool.install(|| {
         jobs.par_iter()
             .map(|job| {
-                let run = simulate(&job.spec, None);
+                let run = simulate(&job.spec, None)?;
                 if let Some(dir) = &keep {
                     let sub = dir.join(format!(
                         "{}-{}-{}-{}",

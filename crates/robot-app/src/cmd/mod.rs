@@ -17,7 +17,7 @@ use std::path::PathBuf;
 use anyhow::Context;
 use clap::Args;
 
-use crate::config::{Config, Method};
+use crate::config::{Method, Params};
 
 /// Options shared by the commands that run the goal-seeking loop (`sim`, `run`).
 #[derive(Debug, Clone, Args)]
@@ -40,13 +40,13 @@ pub struct LoopOptions {
 impl LoopOptions {
     /// Loads the configuration, creates the output folder and writes the configuration used
     /// into it as `config.toml`.
-    pub fn prepare(&self) -> anyhow::Result<Config> {
-        let config = Config::load(self.config.as_deref(), self.method)?;
+    pub fn prepare(&self) -> anyhow::Result<Params> {
+        let config = crate::config::load(self.config.as_deref(), self.method)?;
         std::fs::create_dir_all(&self.out)
             .with_context(|| format!("cannot create {}", self.out.display()))?;
         crate::outputs::write_atomic(
             &self.out.join("config.toml"),
-            config.to_toml_string().as_bytes(),
+            crate::config::to_toml_string(&config).as_bytes(),
         )?;
         Ok(config)
     }

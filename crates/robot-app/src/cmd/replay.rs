@@ -122,20 +122,21 @@ fn run_loop<W: Write>(args: &ReplayArgs, out: &mut W) -> anyhow::Result<()> {
     use crate::record::{RunSettings, leg_summaries, read_recorded_legs, replay_loop};
     let settings = RunSettings::read(&args.file)?;
     let replay = replay_loop(&args.file, &settings.config, settings.start, settings.goal)?;
-    let o = &replay.outcome;
+    let o = &replay.run.outcome;
+    let log = &replay.run.log;
     writeln!(
         out,
         "replayed {} through the loop: {} after {} legs, {} scans read, {} left, {} commands",
         args.file.display(),
         o.reason,
-        o.legs,
+        o.legs_driven,
         replay.scans_read,
         replay.scans_left,
         replay.commands.len()
     )?;
     if let Some(dir) = &args.out {
         std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
-        crate::outputs::write_trajectory(dir, &o.log)?;
+        crate::outputs::write_trajectory(dir, log)?;
         o.grid
             .write_map_server(dir, "map")
             .with_context(|| format!("writing map.pgm/map.yaml in {}", dir.display()))?;
@@ -148,7 +149,7 @@ fn run_loop<W: Write>(args: &ReplayArgs, out: &mut W) -> anyhow::Result<()> {
         out.flush()?;
         return Ok(());
     };
-    let replayed = leg_summaries(&o.log);
+    let replayed = leg_summaries(log);
     let first_diff = recorded
         .iter()
         .zip(&replayed)
@@ -160,7 +161,7 @@ fn run_loop<W: Write>(args: &ReplayArgs, out: &mut W) -> anyhow::Result<()> {
                 out,
                 "same legs as recorded: {} rows (start + {} legs), every estimate, landmark and point B bit for bit; recorded end: {reason}",
                 recorded.len(),
-                o.legs
+                o.legs_driven
             )?;
             out.flush()?;
             Ok(())

@@ -8,8 +8,8 @@ use scan_types::{LaserSource, Pose2, Scan};
 
 use super::sim::{parse_pose_deg, parse_xy, thread_cpu_time_s};
 use crate::base::open_base;
-use crate::navigator::Navigator;
 use crate::outputs::{Reason, Summary};
+use crate::runloop::run_loop;
 
 /// Arguments of `robot-app run`.
 #[derive(Debug, Args)]
@@ -52,7 +52,7 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
         None => None,
     };
     let mut record_error: Option<String> = None;
-    let mut hook = |scan: &Scan| {
+    let mut hook = |scan: &Scan, _: &Pose2| {
         if let Some(r) = recorder.as_mut()
             && record_error.is_none()
             && let Err(e) = r.write(scan)
@@ -62,9 +62,15 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
     };
     let wall = Instant::now();
     let cpu0 = thread_cpu_time_s();
-    let outcome = Navigator::new(&mut laser, &mut *base, &config, start, goal)
-        .with_scan_hook(&mut hook)
-        .run();
+    let run = run_loop(
+        &mut laser,
+        &mut *base,
+        &config,
+        (start, goal),
+        None,
+        Some(&mut hook),
+    )?;
+    let outcome = run.outcome;
     let cpu = thread_cpu_time_s() - cpu0;
     let _ = laser.stop();
     if let Some(r) = recorder {
@@ -74,7 +80,7 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
     let summary = Summary {
         reached: outcome.reason == Reason::Reached,
         reason: outcome.reason,
-        legs: outcome.legs,
+        legs: outcome.legs_driven,
         scans: outcome.scans,
         collisions: 0,
         path_length_m: outcome.path_length_m,
@@ -91,7 +97,11 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
         final_truth: None,
         note: outcome.note.clone(),
     };
-    let run = super::sim::SimRun { summary, outcome };
+    let run = super::sim::SimRun {
+        summary,
+        outcome,
+        log: run.log,
+    };
     super::sim::write_outputs(&args.options.out, &run, "goalseek on a real Hokuyo")?;
     tracing::info!(
         wall_s = wall.elapsed().as_secs_f64(),

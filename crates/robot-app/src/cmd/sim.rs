@@ -8,9 +8,9 @@ use clap::Args;
 use scan_types::{Pose2, WorldPoint};
 use sim_laser::{LaserNoise, MotionNoise, SensorPreset, Simulation, World};
 
-use crate::config::Config;
-use crate::navigator::{Navigator, Outcome};
+use crate::config::Params;
 use crate::outputs::{Reason, Summary, write_summary, write_trajectory};
+use crate::runloop::run_loop;
 
 /// The paper's start: (-3.92, -4.26), heading 45 deg.
 pub const PAPER_START: (f64, f64, f64) = (-3.92, -4.26, 45.0);
@@ -64,12 +64,12 @@ pub struct SimSpec {
     /// Noise on.
     pub noise: bool,
     /// Tuning.
-    pub config: Config,
+    pub config: Params,
 }
 
 impl SimSpec {
     /// The paper's scenario with a seed and a configuration.
-    pub fn paper(seed: u64, config: Config) -> Self {
+    pub fn paper(seed: u64, config: Params) -> Self {
         Self {
             world: Arc::new(World::paper()),
             world_name: "paper".into(),
@@ -87,8 +87,10 @@ impl SimSpec {
 pub struct SimRun {
     /// What `summary.json` holds.
     pub summary: Summary,
-    /// The loop's record.
-    pub outcome: Outcome,
+    /// The navigator's outcome.
+    pub outcome: navigator::Outcome,
+    /// Leg ends with the true pose beside the estimate.
+    pub log: crate::outputs::RunLog,
 }
 
 /// CPU time of the calling thread, seconds.
@@ -108,7 +110,10 @@ fn pose_deg(p: &Pose2) -> [f64; 3] {
 pub type ScanObserver<'a> = &'a mut dyn FnMut(&scan_types::Scan, Pose2, Pose2);
 
 /// Runs one simulated run (no files written).
-pub fn simulate(spec: &SimSpec, on_scan: Option<&mut dyn FnMut(&scan_types::Scan)>) -> SimRun {
+pub fn simulate(
+    spec: &SimSpec,
+    on_scan: Option<&mut dyn FnMut(&scan_types::Scan)>,
+) -> anyhow::Result<SimRun> {
     match on_scan {
         None => simulate_observed(spec, None),
         Some(f) => simulate_observed(spec, Some(&mut |s, _, _| f(s))),
@@ -117,7 +122,10 @@ pub fn simulate(spec: &SimSpec, on_scan: Option<&mut dyn FnMut(&scan_types::Scan
 
 /// Runs one simulated run (no files written), showing every scan with its true pose and the
 /// navigator's estimate to `observer`.
-pub fn simulate_observed(spec: &SimSpec, mut observer: Option<ScanObserver>) -> SimRun {
+pub fn simulate_observed(
+    spec: &SimSpec,
+    mut observer: Option<ScanObserver>,
+) -> anyhow::Result<SimRun> {
     let cpu0 = thread_cpu_time_s();
     let (laser_noise, motion_noise) = if spec.noise {
         (spec.sensor.default_noise(), MotionNoise::default())
@@ -140,12 +148,17 @@ pub fn simulate_observed(spec: &SimSpec, mut observer: Option<ScanObserver>) -> 
             o(s, truth.pose(), *e);
         }
     };
-    let mut nav = Navigator::new(&mut laser, &mut base, &spec.config, spec.start, spec.goal)
-        .with_evaluation(&truth);
-    if observed {
-        nav = nav.with_scan_pose_hook(&mut pose_hook);
-    }
-    let outcome = nav.run();
+    let hook: Option<crate::runloop::ScanPoseHook> =
+        if observed { Some(&mut pose_hook) } else { None };
+    let run = run_loop(
+        &mut laser,
+        &mut base,
+        &spec.config,
+        (spec.start, spec.goal),
+        Some(&truth),
+        hook,
+    )?;
+    let outcome = &run.outcome;
     let cpu = thread_cpu_time_s() - cpu0;
     let t = truth.pose();
     let collisions = truth.collisions();
@@ -156,7 +169,7 @@ pub fn simulate_observed(spec: &SimSpec, mut observer: Option<ScanObserver>) -> 
         outcome.reason
     };
     let reached = reason == Reason::Reached && collisions == 0 && goal_distance <= SUCCESS_RADIUS_M;
-    let (fe, fh) = outcome
+    let (fe, fh) = run
         .log
         .final_errors()
         .map_or((None, None), |(p, h)| (Some(p), Some(h)));
@@ -169,13 +182,13 @@ pub fn simulate_observed(spec: &SimSpec, mut observer: Option<ScanObserver>) -> 
     let summary = Summary {
         reached,
         reason,
-        legs: outcome.legs,
+        legs: outcome.legs_driven,
         scans: outcome.scans,
         collisions,
         path_length_m: outcome.path_length_m,
         final_position_error_m: fe,
         final_heading_error_deg: fh,
-        ate_rmse_m: outcome.log.ate_rmse_m(),
+        ate_rmse_m: run.log.ate_rmse_m(),
         goal_distance_m: Some(goal_distance),
         cpu_time_s: cpu,
         method: spec.config.method.to_string(),
@@ -186,14 +199,18 @@ pub fn simulate_observed(spec: &SimSpec, mut observer: Option<ScanObserver>) -> 
         final_truth: Some(pose_deg(&t)),
         note,
     };
-    SimRun { summary, outcome }
+    Ok(SimRun {
+        summary,
+        outcome: run.outcome,
+        log: run.log,
+    })
 }
 
 /// Writes every output of a run into `dir` (created if needed).
 pub fn write_outputs(dir: &Path, run: &SimRun, title: &str) -> anyhow::Result<()> {
     std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
     write_summary(dir, &run.summary)?;
-    write_trajectory(dir, &run.outcome.log)?;
+    write_trajectory(dir, &run.log)?;
     run.outcome
         .grid
         .write_map_server(dir, "map")
@@ -202,7 +219,7 @@ pub fn write_outputs(dir: &Path, run: &SimRun, title: &str) -> anyhow::Result<()
         .grid
         .to_png(&dir.join("map.png"))
         .with_context(|| format!("writing map.png in {}", dir.display()))?;
-    crate::plot::write_plots(dir, &run.outcome.log, title)
+    crate::plot::write_plots(dir, &run.log, title)
 }
 
 /// Parses `X,Y`.
@@ -279,7 +296,7 @@ pub fn run(args: SimArgs) -> anyhow::Result<()> {
         config,
     };
     let run = match &args.options.record {
-        None => simulate(&spec, None),
+        None => simulate(&spec, None)?,
         Some(path) => record_run(&spec, path)?,
     };
     let title = format!(
@@ -344,11 +361,11 @@ pub fn record_run(spec: &SimSpec, path: &Path) -> anyhow::Result<SimRun> {
             err = Some(anyhow::anyhow!("recording to {}: {e}", path.display()));
         }
     };
-    let run = simulate_observed(spec, Some(&mut hook));
+    let run = simulate_observed(spec, Some(&mut hook))?;
     if let Some(e) = err {
         return Err(e);
     }
-    recorder.write_legs(&run.outcome.log, &run.outcome.reason.to_string())?;
+    recorder.write_legs(&run.log, &run.outcome.reason.to_string())?;
     recorder
         .finish()
         .with_context(|| format!("finishing {}", path.display()))?;

@@ -1,0 +1,201 @@
+//! One leg driven in steps: the landmark tracked, the travel measured on it and refined by
+//! scan matching against keyframes.
+
+use landmarks::{Landmark, TrackUpdate, Tracker};
+use localiser::{MatchParams, MatchTarget};
+use scan_types::{Pose2, Scan, WorldPoint};
+
+use crate::{Navigator, TravelRule};
+
+/// Bearing of the side rays.
+const SIDE_RAD: f64 = std::f64::consts::FRAC_PI_2;
+
+/// What a leg is for.
+#[derive(Debug, Clone, Copy)]
+pub(crate) enum LegKind {
+    /// Straight to the target.
+    Final,
+    /// To point B of a landmark (world frame by the estimate at the leg's start).
+    ToB {
+        landmark: WorldPoint,
+        point_b: WorldPoint,
+    },
+    /// A short leg without a landmark in front.
+    Short,
+}
+
+/// A drive under way.
+pub(crate) struct Drive {
+    pub(crate) kind: LegKind,
+    /// The estimate at the start of the leg.
+    pub(crate) origin: Pose2,
+    limit_m: f64,
+    step_m: f64,
+    stop_at_side: bool,
+    tracker: Option<Tracker>,
+    /// The landmark's distance ahead at the start (OB).
+    ob0: Option<f64>,
+    match_params: MatchParams,
+    /// The reference scan for matching: its pose relative to the start of the drive, the
+    /// measured travel there, and the scan.
+    key: Option<(Pose2, f64, MatchTarget)>,
+    /// Forward motion commanded and done so far, metres.
+    pub(crate) commanded_m: f64,
+    /// Measured travel at the last fix and the commanded travel at that fix.
+    fix: Option<(f64, f64)>,
+    pub(crate) last_scan: Scan,
+}
+
+impl Drive {
+    /// A drive of at most `limit_m` from `origin`, tracking `landmark` (seen in `scan`, taken
+    /// at `origin`); a leg to B stops when the side ray sees the landmark.
+    pub(crate) fn new(
+        nav: &Navigator,
+        kind: LegKind,
+        origin: Pose2,
+        limit_m: f64,
+        landmark: Option<Landmark>,
+        scan: Scan,
+    ) -> Self {
+        let matching = nav.params.localiser.travel_rule == TravelRule::ScanMatched;
+        let match_params = MatchParams::default();
+        let key = matching.then(|| {
+            (
+                Pose2::default(),
+                0.0f64,
+                MatchTarget::from_scan(&nav.geometry, &scan, &match_params),
+            )
+        });
+        Self {
+            kind,
+            origin,
+            limit_m,
+            step_m: nav.params.tracking.step_m,
+            stop_at_side: matches!(kind, LegKind::ToB { .. }),
+            tracker: landmark.map(|l| Tracker::new(l, nav.track_params)),
+            ob0: landmark.map(|l| l.range_m * l.bearing_rad.cos()),
+            match_params,
+            key,
+            commanded_m: 0.0,
+            fix: None,
+            last_scan: scan,
+        }
+    }
+
+    /// The travel measured so far: the last landmark fix plus the commands since.
+    fn measured_m(&self) -> f64 {
+        self.fix
+            .map_or(self.commanded_m, |(m, c)| m + self.commanded_m - c)
+    }
+
+    /// The next step to command, or `None` when the drive is over.
+    pub(crate) fn next_step_m(&self) -> Option<f64> {
+        let (limit, commanded) = (self.limit_m, self.commanded_m);
+        // Written so that a NaN limit also ends the drive.
+        if commanded.partial_cmp(&(limit - 1e-6)) != Some(std::cmp::Ordering::Less) {
+            return None;
+        }
+        // Aim the last step at B itself when the landmark gives its distance.
+        let to_go = match (self.stop_at_side, self.ob0) {
+            (true, Some(ob)) => (ob - self.measured_m()).max(0.01),
+            _ => limit - commanded,
+        };
+        let step = self.step_m.min(to_go).min(limit - commanded);
+        (step > 1e-6).then_some(step)
+    }
+
+    /// Takes the scan after a step; false when the drive stops here (B reached, or the
+    /// landmark of a leg to B lost).
+    pub(crate) fn scanned(&mut self, nav: &Navigator, scan: &Scan) -> bool {
+        self.last_scan = scan.clone();
+        let update = self
+            .tracker
+            .as_mut()
+            .map(|t| t.update(&nav.geometry, scan, self.commanded_m));
+        match update {
+            Some(TrackUpdate::Tracked(l)) => {
+                let measured = self.ob0.unwrap_or(0.0) - l.range_m * l.bearing_rad.cos();
+                self.fix = Some((measured, self.commanded_m));
+                let side = SIDE_RAD - 0.5 * nav.geometry.increment_rad.abs();
+                if self.stop_at_side && l.bearing_rad.abs() >= side {
+                    return false;
+                }
+            }
+            Some(TrackUpdate::Lost) => {
+                tracing::debug!(commanded = self.commanded_m, "landmark lost while driving");
+                if self.stop_at_side {
+                    return false;
+                }
+                self.tracker = None;
+            }
+            Some(TrackUpdate::Predicted(_)) | None => {}
+        }
+        // A new reference scan every `keyframe_m` while scan matching.
+        let measured = self.measured_m();
+        if let Some((pose, at, target)) = self.key.as_mut()
+            && measured - *at >= nav.params.localiser.keyframe_m
+        {
+            *pose = matched(nav, target, pose, measured - *at, scan, &self.match_params);
+            *at = measured;
+            *target = MatchTarget::from_scan(&nav.geometry, scan, &self.match_params);
+        }
+        true
+    }
+
+    /// The pose reached relative to the start of the drive: the travel measured from the
+    /// landmark (the commands when nothing was tracked), refined by scan matching under
+    /// [`TravelRule::ScanMatched`].
+    pub(crate) fn travelled(&mut self, nav: &Navigator) -> Pose2 {
+        let measured = self.measured_m();
+        match self.key.as_mut() {
+            Some((pose, at, target)) => matched(
+                nav,
+                target,
+                pose,
+                measured - *at,
+                &self.last_scan,
+                &self.match_params,
+            ),
+            None => Pose2::new(measured, 0.0, 0.0),
+        }
+    }
+}
+
+/// The pose of `scan` relative to the start of the drive: matched against `target` (the
+/// reference scan taken at `key`), starting from `key` advanced by `ahead_m`; the guess itself
+/// when the match fails.
+fn matched(
+    nav: &Navigator,
+    target: &mut MatchTarget,
+    key: &Pose2,
+    ahead_m: f64,
+    scan: &Scan,
+    params: &MatchParams,
+) -> Pose2 {
+    let guess = Pose2::new(ahead_m, 0.0, 0.0);
+    // The guess is as good as the drive: its error grows with the distance.
+    let l = &nav.params.localiser;
+    let params = &MatchParams {
+        prior_sigma_m: l.match_prior_m + l.match_prior_per_m * ahead_m.abs(),
+        ..*params
+    };
+    match target.align(&nav.geometry, scan, guess, params) {
+        Some(m) => {
+            tracing::debug!(
+                ahead_m,
+                dx = m.pose.x_m - ahead_m,
+                dy = m.pose.y_m,
+                dth_deg = m.pose.theta_rad.to_degrees(),
+                sig = m.worst_sigma_m,
+                rms = m.rms_m,
+                pairs = m.pairs,
+                "scan match"
+            );
+            key.compose(&m.pose)
+        }
+        None => {
+            tracing::debug!(ahead_m, "scan match failed; keeping the landmark's travel");
+            key.compose(&guess)
+        }
+    }
+}

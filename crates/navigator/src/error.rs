@@ -1,0 +1,28 @@
+//! The crate's error type.
+
+/// What can be wrong with the navigator's parameters or inputs.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum NavigatorError {
+    /// A parameter is outside its valid range.
+    #[error("{key} = {value} {requirement}")]
+    InvalidParam {
+        /// The parameter's key, `section.name` as in a configuration file.
+        key: &'static str,
+        /// Its value, as text.
+        value: String,
+        /// What it must satisfy.
+        requirement: &'static str,
+    },
+    /// A method name that is not a preset.
+    #[error("unknown method '{0}' (expected paper or goalseek)")]
+    UnknownMethod(String),
+    /// A start pose or goal that is not finite.
+    #[error("{what} ({value}) must be finite")]
+    NotFinite {
+        /// What was given (start or goal).
+        what: &'static str,
+        /// Its value, as text.
+        value: String,
+    },
+}

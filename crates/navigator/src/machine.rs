@@ -1,0 +1,661 @@
+//! The loop as a state machine: [`Navigator`] is fed scans and motion results and answers
+//! with the next [`Action`]. It never touches a sensor or a base.
+
+use expansion::Expander;
+use landmarks::{DetectParams, Landmark, SelectParams, TrackParams, detect, select};
+use localiser::OccupancyGrid;
+use planner::{Plan, Planner};
+use scan_types::{Pose2, Scan, ScanGeometry, WorldPoint};
+
+use crate::clearance::{block_by_unseen_hits, erode};
+use crate::drive::{Drive, LegKind};
+use crate::{HeadingRule, Leg, NavigatorError, Outcome, Params, PlanRule, Reason};
+
+/// What the navigator asks its driver to do next.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Action {
+    /// Take a scan and pass it to [`Navigator::on_scan`].
+    Scan,
+    /// Turn in place by this angle (counter-clockwise positive), then call
+    /// [`Navigator::on_motion_done`].
+    Rotate {
+        /// The angle, radians.
+        angle_rad: f64,
+    },
+    /// Drive straight ahead by this distance, then call [`Navigator::on_motion_done`].
+    Forward {
+        /// The distance, metres.
+        distance_m: f64,
+    },
+    /// The run is over: stop the base and take [`Navigator::into_outcome`].
+    Finish(Reason),
+}
+
+/// The named phases of the loop.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Phase {
+    /// Waiting for the first scan.
+    Starting,
+    /// Turning in place, in measured chunks, toward a planned ray or to look elsewhere.
+    Turning,
+    /// Driving a leg in steps, tracking a landmark.
+    Driving,
+    /// The run is over.
+    Finished,
+}
+
+/// A turn in place under way.
+struct Turn {
+    /// The scan before the chunk under way.
+    before: Scan,
+    /// One chunk, radians.
+    chunk_rad: f64,
+    /// Chunks not yet commanded.
+    left: usize,
+    /// True once the chunk's motion is done and its scan is awaited.
+    awaiting_scan: bool,
+    /// What the turn is for.
+    then: AfterTurn,
+}
+
+/// What follows a turn.
+#[derive(Clone, Copy)]
+enum AfterTurn {
+    /// A recovery turn: plan again.
+    Replan,
+    /// The turn onto a planned ray: drive the leg.
+    Leg { travel_m: f64, target_in_view: bool },
+}
+
+enum State {
+    Starting,
+    Turning(Turn),
+    Driving(Box<Drive>),
+    Finished,
+}
+
+/// The goal-seeking loop of `docs/method.md` for one run, from `start` to `goal`.
+///
+/// Feed it with the driver loop of [`crate::run`] or your own: answer [`Action::Scan`] with
+/// [`Navigator::on_scan`], a motion with [`Navigator::on_motion_done`] (or
+/// [`Navigator::fail`]), until it answers [`Action::Finish`]. An event that does not answer
+/// the pending action is ignored and the pending action is returned again.
+pub struct Navigator {
+    pub(crate) params: Params,
+    pub(crate) geometry: ScanGeometry,
+    goal: WorldPoint,
+    pub(crate) estimate: Pose2,
+    /// The estimate when motion was last commanded after it changed, and the motion
+    /// commanded since (in that estimate's frame).
+    commanded_since: (Pose2, Pose2),
+    expander: Expander,
+    clearances: Vec<f64>,
+    eroded: Vec<f64>,
+    planner: Planner,
+    grid: OccupancyGrid,
+    detect_params: DetectParams,
+    select_params: SelectParams,
+    pub(crate) track_params: TrackParams,
+    legs_log: Vec<Leg>,
+    scans: usize,
+    path_length_m: f64,
+    legs: usize,
+    first_leg: Option<(WorldPoint, WorldPoint)>,
+    /// Where the robot stands and the hits seen from there (world frame) while it turns in
+    /// place: a replan there still knows what has left the field of view.
+    spot: (WorldPoint, Vec<WorldPoint>),
+    /// Planning failures in a row.
+    failures: usize,
+    state: State,
+    pending: Action,
+    end: Option<(Reason, String)>,
+}
+
+impl Navigator {
+    /// A navigator for a sensor of `geometry`, starting at `start` (the estimate's origin)
+    /// and heading for `goal`. The first action is [`Action::Scan`].
+    pub fn new(
+        params: Params,
+        geometry: ScanGeometry,
+        start: Pose2,
+        goal: WorldPoint,
+    ) -> Result<Self, NavigatorError> {
+        params.validate()?;
+        let finite = |what, ok: bool, value: String| {
+            if ok {
+                Ok(())
+            } else {
+                Err(NavigatorError::NotFinite { what, value })
+            }
+        };
+        finite(
+            "start",
+            start.x_m.is_finite() && start.y_m.is_finite() && start.theta_rad.is_finite(),
+            format!("{}, {}, {}", start.x_m, start.y_m, start.theta_rad),
+        )?;
+        finite(
+            "goal",
+            goal.x_m().is_finite() && goal.y_m().is_finite(),
+            format!("{}, {}", goal.x_m(), goal.y_m()),
+        )?;
+        let (detect_params, select_params, track_params) = params.landmark_params();
+        let planner = Planner::new(params.planner_params());
+        Ok(Self {
+            expander: Expander::new(&geometry),
+            clearances: vec![0.0; geometry.ray_count],
+            eroded: Vec::new(),
+            commanded_since: (start, Pose2::default()),
+            grid: OccupancyGrid::new(params.localiser.map_resolution_m),
+            params,
+            geometry,
+            goal,
+            estimate: start,
+            planner,
+            detect_params,
+            select_params,
+            track_params,
+            legs_log: Vec::new(),
+            scans: 0,
+            path_length_m: 0.0,
+            legs: 0,
+            first_leg: None,
+            spot: (start.position(), Vec::new()),
+            failures: 0,
+            state: State::Starting,
+            pending: Action::Scan,
+            end: None,
+        })
+    }
+
+    /// The action awaiting its result.
+    pub fn pending(&self) -> Action {
+        self.pending
+    }
+
+    /// The phase the loop is in.
+    pub fn phase(&self) -> Phase {
+        match self.state {
+            State::Starting => Phase::Starting,
+            State::Turning(_) => Phase::Turning,
+            State::Driving(_) => Phase::Driving,
+            State::Finished => Phase::Finished,
+        }
+    }
+
+    /// The latest estimate.
+    pub fn estimate(&self) -> Pose2 {
+        self.estimate
+    }
+
+    /// The latest estimate moved by the motion commanded since it was set: the best guess of
+    /// the pose the next scan is taken at.
+    pub fn estimate_now(&self) -> Pose2 {
+        let (at, moved) = self.commanded_since;
+        if at == self.estimate {
+            at.compose(&moved)
+        } else {
+            self.estimate
+        }
+    }
+
+    /// The target.
+    pub fn goal(&self) -> WorldPoint {
+        self.goal
+    }
+
+    /// The sensor geometry the navigator expects.
+    pub fn geometry(&self) -> &ScanGeometry {
+        &self.geometry
+    }
+
+    /// The parameters of the run.
+    pub fn params(&self) -> &Params {
+        &self.params
+    }
+
+    /// Leg ends so far, starting with the start.
+    pub fn legs(&self) -> &[Leg] {
+        &self.legs_log
+    }
+
+    /// Scans accepted so far.
+    pub fn scans(&self) -> usize {
+        self.scans
+    }
+
+    /// The occupancy grid built so far.
+    pub fn grid(&self) -> &OccupancyGrid {
+        &self.grid
+    }
+
+    /// Feeds the scan that answers [`Action::Scan`]; returns the next action.
+    pub fn on_scan(&mut self, scan: &Scan) -> Action {
+        if self.pending != Action::Scan {
+            tracing::warn!(pending = ?self.pending, "a scan arrived while none was asked for; ignored");
+            return self.pending;
+        }
+        if scan.len() != self.geometry.ray_count {
+            let note = format!(
+                "laser returned {} rays, its geometry says {}",
+                scan.len(),
+                self.geometry.ray_count
+            );
+            return self.fail(Reason::SensorFailure, note);
+        }
+        self.scans += 1;
+        let next = match std::mem::replace(&mut self.state, State::Finished) {
+            State::Starting => {
+                let scan = scan.clone();
+                self.integrate(&scan);
+                self.record(None, None, &scan);
+                self.plan_next(scan)
+            }
+            State::Turning(turn) => self.turn_scanned(turn, scan),
+            State::Driving(drive) => self.drive_scanned(drive, scan),
+            State::Finished => Action::Finish(self.reason()),
+        };
+        self.set_pending(next)
+    }
+
+    /// Reports that the motion of [`Action::Rotate`] or [`Action::Forward`] is done; returns
+    /// the next action.
+    pub fn on_motion_done(&mut self) -> Action {
+        let next = match (self.pending, &mut self.state) {
+            (Action::Rotate { angle_rad }, State::Turning(turn)) if !turn.awaiting_scan => {
+                turn.awaiting_scan = true;
+                self.note_command(Pose2::new(0.0, 0.0, angle_rad));
+                Action::Scan
+            }
+            (Action::Forward { distance_m }, State::Driving(drive)) => {
+                drive.commanded_m += distance_m;
+                self.note_command(Pose2::new(distance_m, 0.0, 0.0));
+                self.path_length_m += distance_m.abs();
+                Action::Scan
+            }
+            _ => {
+                tracing::warn!(pending = ?self.pending, "a motion result arrived while no motion was asked for; ignored");
+                self.pending
+            }
+        };
+        self.set_pending(next)
+    }
+
+    /// Ends the run for a reason the caller found (a sensor or base failure, a collision
+    /// seen by a simulator); returns [`Action::Finish`].
+    pub fn fail(&mut self, reason: Reason, note: impl Into<String>) -> Action {
+        if self.end.is_none() {
+            self.end = Some((reason, note.into()));
+        }
+        self.state = State::Finished;
+        self.set_pending(Action::Finish(self.reason()))
+    }
+
+    /// How the run ended (or how it stands) and what it recorded.
+    pub fn into_outcome(self) -> Outcome {
+        let (reason, note) = self.end.unwrap_or((
+            Reason::SensorFailure,
+            "the run was stopped before it finished".into(),
+        ));
+        Outcome {
+            reason,
+            note,
+            legs: self.legs_log,
+            legs_driven: self.legs,
+            scans: self.scans,
+            path_length_m: self.path_length_m,
+            estimate: self.estimate,
+            grid: self.grid,
+            first_leg: self.first_leg,
+        }
+    }
+
+    fn reason(&self) -> Reason {
+        self.end.as_ref().map_or(Reason::SensorFailure, |e| e.0)
+    }
+
+    fn set_pending(&mut self, next: Action) -> Action {
+        self.pending = next;
+        next
+    }
+
+    fn finish(&mut self, reason: Reason, note: String) -> Action {
+        self.end = Some((reason, note));
+        self.state = State::Finished;
+        Action::Finish(reason)
+    }
+
+    /// Adds a commanded motion (robot frame) to the motion since the estimate was set.
+    fn note_command(&mut self, motion: Pose2) {
+        if self.commanded_since.0 != self.estimate {
+            self.commanded_since = (self.estimate, Pose2::default());
+        }
+        self.commanded_since.1 = self.commanded_since.1.compose(&motion);
+    }
+
+    fn record(&mut self, landmark: Option<WorldPoint>, point_b: Option<WorldPoint>, scan: &Scan) {
+        let scan_points = scan
+            .robot_hits(&self.geometry)
+            .map(|(_, p)| self.estimate.transform_point(p))
+            .collect();
+        self.legs_log.push(Leg {
+            leg: self.legs,
+            estimate: self.estimate,
+            landmark,
+            point_b,
+            scan_points,
+        });
+    }
+
+    fn integrate(&mut self, scan: &Scan) {
+        self.grid.integrate(&self.estimate, &self.geometry, scan);
+        self.planner.add_scan(&self.estimate, &self.geometry, scan);
+    }
+
+    /// The top of a cycle: stop, or expand, plan and start the turn onto the chosen ray.
+    fn plan_next(&mut self, scan: Scan) -> Action {
+        let to_goal = self.estimate.position().distance_m(&self.goal);
+        let n = &self.params.navigator;
+        if to_goal <= n.goal_tolerance_m {
+            return self.finish(
+                Reason::Reached,
+                "estimate within tolerance of the target".into(),
+            );
+        }
+        if self.legs >= n.max_legs {
+            let note = format!(
+                "{} legs driven, {to_goal:.2} m from the target by the estimate",
+                self.legs
+            );
+            return self.finish(Reason::LegLimit, note);
+        }
+        if self.failures >= n.max_failed_tries {
+            let note = format!(
+                "no way toward the target after {} tries ({to_goal:.2} m away)",
+                self.failures
+            );
+            return self.finish(Reason::Unreachable, note);
+        }
+        // 2-3. Expand and plan.
+        let r = self.params.expansion_radius_m();
+        self.expander.clearances(&scan, r, &mut self.clearances);
+        if self.params.planner.remember_turned_away_hits {
+            self.block_by_spot_hits(&scan, r);
+        }
+        let half = (self.params.planner.width_window_deg.to_radians()
+            / self.geometry.increment_rad.abs())
+        .ceil() as usize;
+        erode(&self.clearances, half, &mut self.eroded);
+        std::mem::swap(&mut self.clearances, &mut self.eroded);
+        let plan = self.planner.plan(
+            &self.estimate,
+            &self.geometry,
+            &scan,
+            &self.clearances,
+            self.goal,
+        );
+        match plan {
+            Plan::Go {
+                alpha_rad,
+                travel_m,
+                target_in_view,
+                ..
+            } => self.start_turn(
+                alpha_rad,
+                scan,
+                AfterTurn::Leg {
+                    travel_m,
+                    target_in_view,
+                },
+            ),
+            Plan::Unreachable { tries } => self.finish(
+                Reason::Unreachable,
+                format!("the planner found no way to the target after {tries} tries"),
+            ),
+            _ => {
+                self.failures += 1;
+                tracing::debug!(
+                    failures = self.failures,
+                    "no safe ray; turning to look elsewhere"
+                );
+                let turn = self.params.navigator.recovery_turn_deg.to_radians();
+                self.start_turn(turn, scan, AfterTurn::Replan)
+            }
+        }
+    }
+
+    /// Rotates by `alpha` (step 4) in chunks the scans can still align.
+    fn start_turn(&mut self, alpha_rad: f64, before: Scan, then: AfterTurn) -> Action {
+        let max_chunk = self.params.navigator.rotation_chunk_deg.to_radians();
+        let chunks = (alpha_rad.abs() / max_chunk).ceil().max(1.0) as usize;
+        let chunk_rad = alpha_rad / chunks as f64;
+        self.state = State::Turning(Turn {
+            before,
+            chunk_rad,
+            left: chunks - 1,
+            awaiting_scan: false,
+            then,
+        });
+        Action::Rotate {
+            angle_rad: chunk_rad,
+        }
+    }
+
+    /// The scan after a chunk (step 5): the heading by the heading rule, then the next
+    /// chunk or what follows the turn.
+    fn turn_scanned(&mut self, mut turn: Turn, after: &Scan) -> Action {
+        let chunk = turn.chunk_rad;
+        let measured = || {
+            localiser::measure_rotation(
+                &self.geometry,
+                &turn.before,
+                after,
+                chunk,
+                self.params.localiser.rotation_search_deg.to_radians(),
+            )
+            .unwrap_or_else(|| {
+                tracing::debug!(chunk, "rotation not measurable; using the command");
+                chunk
+            })
+        };
+        let turned = match self.params.localiser.heading_rule {
+            HeadingRule::Commanded => chunk,
+            HeadingRule::ScanMeasured => measured(),
+            HeadingRule::ScanMatched => {
+                let m = measured();
+                self.rotation_matched(&turn.before, after, m).unwrap_or(m)
+            }
+        };
+        self.estimate = self.estimate.rotated(turned);
+        turn.before = after.clone();
+        if turn.left > 0 {
+            turn.left -= 1;
+            turn.awaiting_scan = false;
+            self.state = State::Turning(turn);
+            return Action::Rotate { angle_rad: chunk };
+        }
+        match turn.then {
+            AfterTurn::Replan => self.plan_next(turn.before),
+            AfterTurn::Leg {
+                travel_m,
+                target_in_view,
+            } => self.start_leg(turn.before, travel_m, target_in_view),
+        }
+    }
+
+    /// The rotation in place between `before` and `after` by scan matching, starting from
+    /// `guess_rad`; the position is held near the spot by a tight prior.
+    fn rotation_matched(&self, before: &Scan, after: &Scan, guess_rad: f64) -> Option<f64> {
+        let params = localiser::MatchParams {
+            prior_sigma_m: self.params.localiser.turn_match_prior_m,
+            initial_gate_m: self.params.localiser.turn_match_gate_m,
+            ..localiser::MatchParams::default()
+        };
+        let mut target = localiser::MatchTarget::from_scan(&self.geometry, before, &params);
+        let m = target.align(
+            &self.geometry,
+            after,
+            Pose2::new(0.0, 0.0, guess_rad),
+            &params,
+        )?;
+        Some(guess_rad + scan_types::angle_diff_rad(m.pose.theta_rad, guess_rad))
+    }
+
+    /// Clearance straight ahead in `scan` (the rays near bearing 0), metres.
+    fn free_ahead_m(&mut self, scan: &Scan) -> f64 {
+        let r = self.params.expansion_radius_m();
+        self.expander.clearances(scan, r, &mut self.clearances);
+        // The robot's own width: the narrowest clearance over the rays within the window.
+        let centre = self.geometry.nearest_index(0.0).unwrap_or(0);
+        let window = self.params.navigator.free_ahead_window_deg.to_radians();
+        let half = (window / self.geometry.increment_rad.abs()).ceil() as usize;
+        let lo = centre.saturating_sub(half);
+        let hi = (centre + half).min(self.geometry.ray_count - 1);
+        self.clearances[lo..=hi]
+            .iter()
+            .copied()
+            .fold(f64::INFINITY, f64::min)
+    }
+
+    /// After the turn onto a ray: choose the leg (final, to a landmark's B, or short) and
+    /// start driving it.
+    fn start_leg(&mut self, scan: Scan, travel_m: f64, target_in_view: bool) -> Action {
+        let free = self.free_ahead_m(&scan);
+        let limit = travel_m.min(free).min(self.params.planner.max_leg_m);
+        if limit < self.params.navigator.min_leg_m {
+            self.failures += 1;
+            tracing::debug!(free, travel_m, "no room ahead after the rotation");
+            return self.plan_next(scan);
+        }
+        let origin = self.estimate;
+        let goal_r = origin.inverse_transform_point(self.goal);
+        let goal_ahead = goal_r.x_m();
+        // 5. Landmarks in front, the nearest usable one (eq. 6).
+        let min_cb = self.params.landmarks.min_cb_m;
+        let usable: Vec<Landmark> = detect(&self.geometry, &scan, &self.detect_params)
+            .into_iter()
+            .filter(|l| {
+                let ob = l.range_m * l.bearing_rad.cos();
+                let cb = (l.range_m * l.bearing_rad.sin()).abs();
+                ob <= limit && cb >= min_cb
+            })
+            .collect();
+        let chosen = select(&usable, &self.select_params);
+        let bearing = self.params.navigator.final_leg_bearing_deg.to_radians();
+        let final_leg = (target_in_view || goal_r.bearing_rad().abs() < bearing)
+            && goal_ahead <= limit + 1e-9
+            && chosen.is_none_or(|l| l.range_m * l.bearing_rad.cos() >= goal_ahead);
+        self.legs += 1;
+        let (kind, limit_m, landmark) = if final_leg {
+            // The goal is closer than any landmark: drive to it, measuring the travel on
+            // whatever feature stays in view.
+            (LegKind::Final, goal_ahead, self.any_landmark(&scan))
+        } else if let Some(lm) = chosen {
+            // 6. Triangle OBC; 7. drive to B tracking the landmark.
+            let tri = localiser::triangle(&origin, lm.range_m, lm.bearing_rad);
+            if self.first_leg.is_none() {
+                self.first_leg = Some((tri.landmark, tri.point_b));
+            }
+            let kind = LegKind::ToB {
+                landmark: tri.landmark,
+                point_b: tri.point_b,
+            };
+            (kind, limit, Some(lm))
+        } else {
+            // No landmark in front: a short leg measured on any feature in view.
+            let leg = limit.min(self.params.navigator.short_leg_m);
+            (LegKind::Short, leg, self.any_landmark(&scan))
+        };
+        let drive = Drive::new(self, kind, origin, limit_m, landmark, scan);
+        self.drive_step(Box::new(drive))
+    }
+
+    /// The next step of a drive, or the drive's end.
+    fn drive_step(&mut self, drive: Box<Drive>) -> Action {
+        match drive.next_step_m() {
+            Some(step) => {
+                self.state = State::Driving(drive);
+                Action::Forward { distance_m: step }
+            }
+            None => self.end_leg(drive),
+        }
+    }
+
+    /// The scan after a step (step 7): track the landmark, maybe stop at B, maybe a new
+    /// keyframe.
+    fn drive_scanned(&mut self, mut drive: Box<Drive>, scan: &Scan) -> Action {
+        if drive.scanned(self, scan) {
+            self.drive_step(drive)
+        } else {
+            self.end_leg(drive)
+        }
+    }
+
+    /// Localises at the leg's end and maps (steps 7-8), counts the try and plans again.
+    fn end_leg(&mut self, drive: Box<Drive>) -> Action {
+        let mut drive = *drive;
+        let rel = drive.travelled(self);
+        self.estimate = drive.origin.compose(&rel);
+        let scan = drive.last_scan;
+        self.integrate(&scan);
+        match drive.kind {
+            LegKind::ToB { landmark, point_b } => self.record(Some(landmark), Some(point_b), &scan),
+            LegKind::Final | LegKind::Short => self.record(None, None, &scan),
+        }
+        // Greedy: a leg that brings the robot no closer failed (the paper's rule turns in
+        // place forever behind a wall). MapPath: detours away from the target are how it
+        // leaves a dead end, so only a leg that hardly moved failed; the planner itself
+        // reports a target cut off on the map.
+        let before_leg = drive.origin.position();
+        let moved = before_leg.distance_m(&self.estimate.position());
+        let progress = match self.params.planner.rule {
+            PlanRule::Greedy => {
+                before_leg.distance_m(&self.goal) - self.estimate.position().distance_m(&self.goal)
+            }
+            PlanRule::MapPath => moved,
+        };
+        if progress < self.params.navigator.min_progress_m {
+            self.failures += 1;
+        } else {
+            self.failures = 0;
+        }
+        self.plan_next(scan)
+    }
+
+    /// A landmark to measure travel by on a leg without a goal landmark: the nearest stable
+    /// feature anywhere in the field of view.
+    fn any_landmark(&self, scan: &Scan) -> Option<Landmark> {
+        let found = detect(&self.geometry, scan, &self.detect_params);
+        let all = SelectParams {
+            max_bearing_rad: std::f64::consts::PI,
+            min_ahead_m: f64::NEG_INFINITY,
+            ..self.select_params
+        };
+        select(&found, &all)
+    }
+
+    /// Cuts each ray's clearance where the disc of radius `r` around a hit seen earlier from
+    /// this spot, now outside the field of view, enters it, then remembers the hits of
+    /// `scan`. Without it a turn in place forgets an obstacle right behind the robot and the
+    /// next plan turns back into it.
+    fn block_by_spot_hits(&mut self, scan: &Scan, r: f64) {
+        let here = self.estimate.position();
+        if here.distance_m(&self.spot.0) > 1e-9 {
+            self.spot = (here, Vec::new());
+        }
+        block_by_unseen_hits(
+            &self.geometry,
+            &self.estimate,
+            &self.spot.1,
+            r,
+            &mut self.clearances,
+        );
+        // Only hits that can block a leg.
+        let reach = r + self.params.planner.max_leg_m;
+        let estimate = self.estimate;
+        self.spot.1.extend(
+            scan.robot_hits(&self.geometry)
+                .filter(|(_, p)| p.range_m() <= reach)
+                .map(|(_, p)| estimate.transform_point(p)),
+        );
+    }
+}

@@ -1,0 +1,71 @@
+//! What a run records: one [`Leg`] per leg end, and the [`Outcome`] when it finishes.
+
+use localiser::OccupancyGrid;
+use scan_types::{Pose2, WorldPoint};
+use serde::{Deserialize, Serialize};
+
+/// Why a run ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Reason {
+    /// The estimate reached the target within tolerance.
+    Reached,
+    /// No way toward the target was found after the bounded number of tries.
+    Unreachable,
+    /// The leg limit was hit first.
+    LegLimit,
+    /// The robot touched an obstacle (reported by the caller, e.g. a simulator).
+    Collision,
+    /// The laser or the base failed (reported by the caller).
+    SensorFailure,
+}
+
+impl std::fmt::Display for Reason {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Reason::Reached => "reached",
+            Reason::Unreachable => "unreachable",
+            Reason::LegLimit => "leg_limit",
+            Reason::Collision => "collision",
+            Reason::SensorFailure => "sensor_failure",
+        })
+    }
+}
+
+/// The estimate at the end of a leg (leg 0 is the start) and what the leg localised on.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Leg {
+    /// Leg number (0 = start).
+    pub leg: usize,
+    /// The robot's estimate.
+    pub estimate: Pose2,
+    /// The landmark the leg localised on, world frame by the estimate.
+    pub landmark: Option<WorldPoint>,
+    /// Point B of the leg (where the side ray should see the landmark).
+    pub point_b: Option<WorldPoint>,
+    /// The hits of the scan taken at the end of the leg, world frame by the estimate.
+    pub scan_points: Vec<WorldPoint>,
+}
+
+/// How a run ended and what it recorded.
+#[derive(Debug, Clone)]
+pub struct Outcome {
+    /// Why the run ended.
+    pub reason: Reason,
+    /// One line on how it ended.
+    pub note: String,
+    /// Every leg end, starting with the start.
+    pub legs: Vec<Leg>,
+    /// Legs driven.
+    pub legs_driven: usize,
+    /// Scans taken.
+    pub scans: usize,
+    /// Sum of the forward moves commanded and completed, metres.
+    pub path_length_m: f64,
+    /// The final estimate.
+    pub estimate: Pose2,
+    /// The occupancy grid built from the localised scans.
+    pub grid: OccupancyGrid,
+    /// The first leg's landmark and point B, world frame.
+    pub first_leg: Option<(WorldPoint, WorldPoint)>,
+}

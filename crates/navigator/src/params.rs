@@ -1,0 +1,505 @@
+//! Every number the loop uses, in one serde-deserialisable tree with two presets.
+//!
+//! [`Params::goalseek`] is goalseek's default; [`Params::paper`] is the paper as written. The
+//! sections and keys are those of a `robot-app --config` file (`docs/method.md` lists them
+//! all with both presets' values).
+
+use std::str::FromStr;
+
+use landmarks::{DetectParams, SelectParams, TrackParams};
+use serde::{Deserialize, Serialize};
+
+use crate::NavigatorError;
+
+/// Which variant of the method to run.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum Method {
+    /// The paper as written: greedy ray choice, commanded heading, the paper's landmark rule.
+    Paper,
+    /// goalseek's default: map path, scan-measured rotation, stability rules, tight gate.
+    #[default]
+    Goalseek,
+}
+
+impl FromStr for Method {
+    type Err = NavigatorError;
+    fn from_str(s: &str) -> Result<Self, NavigatorError> {
+        match s {
+            "paper" => Ok(Method::Paper),
+            "goalseek" => Ok(Method::Goalseek),
+            other => Err(NavigatorError::UnknownMethod(other.to_string())),
+        }
+    }
+}
+
+impl std::fmt::Display for Method {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Method::Paper => "paper",
+            Method::Goalseek => "goalseek",
+        })
+    }
+}
+
+/// How the next ray is chosen.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum PlanRule {
+    /// The paper: the safe ray whose clear stretch passes closest to the target.
+    Greedy,
+    /// goalseek: the safe ray with the shortest path to the target over the robot's own map.
+    MapPath,
+}
+
+/// Where the heading after a rotation comes from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum HeadingRule {
+    /// The paper: theta += commanded alpha.
+    Commanded,
+    /// The shift that best aligns the scans before and after the rotation.
+    ScanMeasured,
+    /// goalseek: the shift, refined by matching the two scans' surfaces (point-to-line ICP).
+    ScanMatched,
+}
+
+/// Where the distance driven on a leg comes from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum TravelRule {
+    /// The paper: the tracked landmark (OB minus its current distance ahead), else the command.
+    Landmark,
+    /// goalseek: the landmark's figure refined by matching the scan at the leg's end against
+    /// the scans at its start (point-to-line ICP), which also measures the sideways drift.
+    ScanMatched,
+}
+
+/// The robot and the obstacle expansion.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RobotParams {
+    /// Robot radius r, metres (the paper: 0.3).
+    pub radius_m: f64,
+    /// Extra margin added to r when expanding obstacles, metres.
+    pub expansion_margin_m: f64,
+}
+
+/// Path selection.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PlanningParams {
+    /// Ray choice rule.
+    pub rule: PlanRule,
+    /// Shortest clear stretch a ray needs to count as safe, metres.
+    pub min_travel_m: f64,
+    /// Longest leg driven without a landmark fix, metres.
+    pub max_leg_m: f64,
+    /// Cell size of the planner's own obstacle grid (map_path), metres.
+    pub grid_resolution_m: f64,
+    /// A ray's clearance is the smallest over the rays within this bearing of it, degrees
+    /// (the robot's width). 0 = the ray alone (the paper).
+    pub width_window_deg: f64,
+    /// While the robot turns in place, hits seen earlier from the same spot that have left the
+    /// field of view still cut the rays' clearance (the paper: no memory).
+    pub remember_turned_away_hits: bool,
+}
+
+/// Landmark detection and selection.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LandmarkParams {
+    /// Neighbour offset n of the jump rule (ray x in A, ray x +/- n not in A).
+    pub neighbour_n: usize,
+    /// Landmarks count only within this bearing of the central ray, degrees (the paper: 90).
+    pub max_bearing_deg: f64,
+    /// Hits closer than this to the maximum range are not landmarks (range-limit artefacts), metres.
+    pub range_limit_margin_m: f64,
+    /// Also use occlusion edges (range jumps between two hits).
+    pub occlusion_edges: bool,
+    /// Also select corners (two straight arms meeting at an angle) as landmarks; the paper
+    /// selects only max-range jumps. Tracking re-identifies every kind either way.
+    pub corners: bool,
+    /// Smallest range jump that makes an occlusion edge, metres.
+    pub min_jump_m: f64,
+    /// Smallest OB (distance to drive to B) for a landmark to be usable, metres.
+    pub min_ob_m: f64,
+    /// Smallest |CB| (distance of the landmark from the path), metres.
+    pub min_cb_m: f64,
+}
+
+/// Tracking the landmark while driving to B.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TrackingParams {
+    /// Length of one forward step between scans, metres.
+    pub step_m: f64,
+    /// Re-identification gate around the predicted landmark point, metres.
+    pub gate_m: f64,
+    /// Scans in a row the landmark may be missed before it counts as lost.
+    pub max_missed_scans: usize,
+}
+
+/// Localisation.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LocaliserParams {
+    /// Heading update rule.
+    pub heading_rule: HeadingRule,
+    /// Half-width of the search around the commanded rotation, degrees.
+    pub rotation_search_deg: f64,
+    /// Travel rule of a leg.
+    pub travel_rule: TravelRule,
+    /// While driving, a new reference scan for matching every this many metres.
+    pub keyframe_m: f64,
+    /// Standard deviation of a drive's guessed end (landmark or command) at zero distance,
+    /// metres: what scan matching weighs the data against.
+    pub match_prior_m: f64,
+    /// ... growing by this much per metre driven (the base's drive scale error).
+    pub match_prior_per_m: f64,
+    /// Standard deviation of the position prior when matching the scans before and after a
+    /// turn in place (heading rule scan_matched), metres.
+    pub turn_match_prior_m: f64,
+    /// First pairing gate of that match, metres.
+    pub turn_match_gate_m: f64,
+    /// Occupancy grid cell size, metres.
+    pub map_resolution_m: f64,
+}
+
+/// The loop itself.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LoopParams {
+    /// Most legs before the run gives up (reason leg_limit).
+    pub max_legs: usize,
+    /// The estimate within this of the target counts as arrival, metres.
+    pub goal_tolerance_m: f64,
+    /// Planning failures in a row (no safe ray, no progress) before the goal is unreachable.
+    pub max_failed_tries: usize,
+    /// Turn in place by this much when no safe ray exists, degrees.
+    pub recovery_turn_deg: f64,
+    /// A rotation is commanded in chunks of at most this much, each measured on its scans,
+    /// degrees.
+    pub rotation_chunk_deg: f64,
+    /// The way ahead after a rotation is the narrowest clearance within this bearing of the
+    /// heading, degrees.
+    pub free_ahead_window_deg: f64,
+    /// The final leg drives straight at the target when it lies within this bearing (or in
+    /// the view of the chosen ray), degrees.
+    pub final_leg_bearing_deg: f64,
+    /// A leg shorter than this is not driven (counts as a failed try), metres.
+    pub min_leg_m: f64,
+    /// A leg that brings less progress than this counts as a failed try, metres.
+    pub min_progress_m: f64,
+    /// Length of a leg without a landmark in front, metres.
+    pub short_leg_m: f64,
+}
+
+/// Every tuning parameter of a run.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Params {
+    /// The preset these values started from.
+    pub method: Method,
+    /// Robot and expansion.
+    pub robot: RobotParams,
+    /// Path selection.
+    pub planner: PlanningParams,
+    /// Landmark detection and selection.
+    pub landmarks: LandmarkParams,
+    /// Landmark tracking.
+    pub tracking: TrackingParams,
+    /// Localisation and mapping.
+    pub localiser: LocaliserParams,
+    /// The loop.
+    pub navigator: LoopParams,
+}
+
+impl Default for Params {
+    fn default() -> Self {
+        Self::goalseek()
+    }
+}
+
+impl Params {
+    /// goalseek's defaults.
+    pub fn goalseek() -> Self {
+        Params {
+            method: Method::Goalseek,
+            robot: RobotParams {
+                radius_m: 0.3,
+                expansion_margin_m: 0.1,
+            },
+            planner: PlanningParams {
+                rule: PlanRule::MapPath,
+                min_travel_m: 0.3,
+                max_leg_m: 3.0,
+                grid_resolution_m: 0.1,
+                width_window_deg: 2.0,
+                remember_turned_away_hits: true,
+            },
+            landmarks: LandmarkParams {
+                neighbour_n: 1,
+                max_bearing_deg: 90.0,
+                range_limit_margin_m: 0.15,
+                occlusion_edges: false,
+                corners: false,
+                min_jump_m: 0.5,
+                min_ob_m: 0.2,
+                min_cb_m: 0.15,
+            },
+            tracking: TrackingParams {
+                step_m: 0.05,
+                gate_m: 0.06,
+                max_missed_scans: 3,
+            },
+            localiser: LocaliserParams {
+                heading_rule: HeadingRule::ScanMatched,
+                rotation_search_deg: 6.0,
+                travel_rule: TravelRule::ScanMatched,
+                keyframe_m: 1.0,
+                match_prior_m: 0.005,
+                match_prior_per_m: 0.02,
+                turn_match_prior_m: 0.01,
+                turn_match_gate_m: 0.15,
+                map_resolution_m: 0.05,
+            },
+            navigator: LoopParams {
+                max_legs: 60,
+                goal_tolerance_m: 0.15,
+                max_failed_tries: 8,
+                recovery_turn_deg: 60.0,
+                rotation_chunk_deg: 90.0,
+                free_ahead_window_deg: 2.0,
+                final_leg_bearing_deg: 3.0,
+                min_leg_m: 0.05,
+                min_progress_m: 0.05,
+                short_leg_m: 1.0,
+            },
+        }
+    }
+
+    /// The paper as written: goalseek's values where the paper names none.
+    pub fn paper() -> Self {
+        let mut c = Self::goalseek();
+        c.method = Method::Paper;
+        c.robot.expansion_margin_m = 0.0;
+        c.planner.rule = PlanRule::Greedy;
+        c.planner.width_window_deg = 0.0;
+        c.planner.remember_turned_away_hits = false;
+        c.landmarks.range_limit_margin_m = 0.0;
+        c.tracking.gate_m = 0.2;
+        c.localiser.heading_rule = HeadingRule::Commanded;
+        c.localiser.travel_rule = TravelRule::Landmark;
+        c
+    }
+
+    /// The preset of a method.
+    pub fn preset(method: Method) -> Self {
+        match method {
+            Method::Goalseek => Self::goalseek(),
+            Method::Paper => Self::paper(),
+        }
+    }
+
+    /// Checks every value against its valid range; the error names the key.
+    pub fn validate(&self) -> Result<(), NavigatorError> {
+        let r = &self.robot;
+        let p = &self.planner;
+        let l = &self.landmarks;
+        let t = &self.tracking;
+        let z = &self.localiser;
+        let n = &self.navigator;
+        for (key, v) in [
+            ("robot.radius_m", r.radius_m),
+            ("planner.min_travel_m", p.min_travel_m),
+            ("planner.max_leg_m", p.max_leg_m),
+            ("planner.grid_resolution_m", p.grid_resolution_m),
+            ("landmarks.max_bearing_deg", l.max_bearing_deg),
+            ("landmarks.min_jump_m", l.min_jump_m),
+            ("tracking.step_m", t.step_m),
+            ("tracking.gate_m", t.gate_m),
+            ("localiser.rotation_search_deg", z.rotation_search_deg),
+            ("localiser.keyframe_m", z.keyframe_m),
+            ("localiser.match_prior_m", z.match_prior_m),
+            ("localiser.turn_match_prior_m", z.turn_match_prior_m),
+            ("localiser.turn_match_gate_m", z.turn_match_gate_m),
+            ("localiser.map_resolution_m", z.map_resolution_m),
+            ("navigator.goal_tolerance_m", n.goal_tolerance_m),
+            ("navigator.recovery_turn_deg", n.recovery_turn_deg),
+            ("navigator.rotation_chunk_deg", n.rotation_chunk_deg),
+            ("navigator.short_leg_m", n.short_leg_m),
+        ] {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(invalid(key, v, "must be a positive number"));
+            }
+        }
+        for (key, v) in [
+            ("robot.expansion_margin_m", r.expansion_margin_m),
+            ("planner.width_window_deg", p.width_window_deg),
+            ("landmarks.range_limit_margin_m", l.range_limit_margin_m),
+            ("landmarks.min_ob_m", l.min_ob_m),
+            ("landmarks.min_cb_m", l.min_cb_m),
+            ("localiser.match_prior_per_m", z.match_prior_per_m),
+            ("navigator.free_ahead_window_deg", n.free_ahead_window_deg),
+            ("navigator.final_leg_bearing_deg", n.final_leg_bearing_deg),
+            ("navigator.min_leg_m", n.min_leg_m),
+            ("navigator.min_progress_m", n.min_progress_m),
+        ] {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(invalid(key, v, "must be a number >= 0"));
+            }
+        }
+        if l.neighbour_n == 0 {
+            return Err(invalid("landmarks.neighbour_n", 0, "must be at least 1"));
+        }
+        if n.max_legs == 0 {
+            return Err(invalid("navigator.max_legs", 0, "must be at least 1"));
+        }
+        Ok(())
+    }
+
+    /// Landmark detection, selection and tracking parameters: the method's preset with the
+    /// configured keys applied.
+    pub fn landmark_params(&self) -> (DetectParams, SelectParams, TrackParams) {
+        let (mut detect, mut select, mut track) = match self.method {
+            Method::Paper => (
+                DetectParams::paper(),
+                SelectParams::paper(),
+                TrackParams::paper(),
+            ),
+            Method::Goalseek => (
+                DetectParams::default(),
+                SelectParams::default(),
+                TrackParams::default(),
+            ),
+        };
+        let l = &self.landmarks;
+        detect.neighbour_n = l.neighbour_n;
+        detect.range_limit_margin_m = l.range_limit_margin_m;
+        detect.reject_near_range_limit = l.range_limit_margin_m > 0.0;
+        detect.occlusion_edges = l.occlusion_edges;
+        detect.corners = l.corners;
+        detect.occlusion_jump_m = l.min_jump_m;
+        select.max_bearing_rad = l.max_bearing_deg.to_radians();
+        select.min_ahead_m = l.min_ob_m;
+        track.gate_m = self.tracking.gate_m;
+        track.max_missed_scans = self.tracking.max_missed_scans;
+        track.detect = detect;
+        (detect, select, track)
+    }
+
+    /// The planner's parameters.
+    pub fn planner_params(&self) -> planner::PlannerParams {
+        planner::PlannerParams {
+            rule: match self.planner.rule {
+                PlanRule::Greedy => planner::PlanRule::Greedy,
+                PlanRule::MapPath => planner::PlanRule::MapPath,
+            },
+            robot_radius_m: self.robot.radius_m,
+            margin_m: self.robot.expansion_margin_m,
+            min_travel_m: self.planner.min_travel_m,
+            max_travel_m: self.planner.max_leg_m,
+            grid_resolution_m: self.planner.grid_resolution_m,
+            ..planner::PlannerParams::default()
+        }
+    }
+
+    /// The expansion radius: r plus the margin, metres.
+    pub fn expansion_radius_m(&self) -> f64 {
+        self.robot.radius_m + self.robot.expansion_margin_m
+    }
+}
+
+fn invalid(key: &'static str, value: impl ToString, requirement: &'static str) -> NavigatorError {
+    NavigatorError::InvalidParam {
+        key,
+        value: value.to_string(),
+        requirement,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn presets_differ_where_the_paper_differs() {
+        let p = Params::paper();
+        let g = Params::goalseek();
+        assert_eq!(p.planner.rule, PlanRule::Greedy);
+        assert_eq!(g.planner.rule, PlanRule::MapPath);
+        assert_eq!(p.localiser.heading_rule, HeadingRule::Commanded);
+        assert_eq!(g.localiser.heading_rule, HeadingRule::ScanMatched);
+        assert_eq!(p.robot.expansion_margin_m, 0.0);
+        assert_eq!(g.robot.expansion_margin_m, 0.1);
+        assert_eq!(g.navigator.max_legs, 60);
+        assert_eq!(p.robot.radius_m, 0.3);
+        assert_eq!(Params::preset(Method::Paper), p);
+        assert!(p.validate().is_ok() && g.validate().is_ok());
+    }
+
+    #[test]
+    fn invalid_values_name_their_key() {
+        let mut p = Params::goalseek();
+        p.navigator.min_leg_m = f64::NAN;
+        let e = p.validate().unwrap_err().to_string();
+        assert!(
+            e.contains("navigator.min_leg_m") && e.contains("NaN"),
+            "{e}"
+        );
+        let mut p = Params::goalseek();
+        p.robot.radius_m = -1.0;
+        assert!(
+            p.validate()
+                .unwrap_err()
+                .to_string()
+                .contains("robot.radius_m")
+        );
+        let mut p = Params::goalseek();
+        p.navigator.max_legs = 0;
+        assert!(p.validate().unwrap_err().to_string().contains("max_legs"));
+        assert!(
+            "astar"
+                .parse::<Method>()
+                .unwrap_err()
+                .to_string()
+                .contains("astar")
+        );
+    }
+
+    #[test]
+    fn landmark_params_apply_the_configured_keys_to_detection_and_tracking() {
+        let mut p = Params::goalseek();
+        p.landmarks.corners = true;
+        p.landmarks.max_bearing_deg = 30.0;
+        p.tracking.gate_m = 0.15;
+        let (detect, select, track) = p.landmark_params();
+        assert!(detect.corners);
+        // The tracker detects with the same parameters as the leg's detection.
+        assert!(track.detect.corners);
+        assert_eq!(track.gate_m, 0.15);
+        assert!((select.max_bearing_rad - 30f64.to_radians()).abs() < 1e-15);
+        p.landmarks.corners = false;
+        let (detect, _, track) = p.landmark_params();
+        assert!(!detect.corners && !track.detect.corners);
+    }
+
+    #[test]
+    fn planner_params_follow_the_keys() {
+        let mut c = Params::goalseek();
+        c.robot.radius_m = 0.25;
+        c.robot.expansion_margin_m = 0.05;
+        c.planner.min_travel_m = 0.4;
+        c.planner.max_leg_m = 1.5;
+        c.planner.grid_resolution_m = 0.2;
+        c.planner.rule = PlanRule::Greedy;
+        let p = c.planner_params();
+        assert_eq!(p.robot_radius_m, 0.25);
+        assert_eq!(p.margin_m, 0.05);
+        assert_eq!(p.min_travel_m, 0.4);
+        assert_eq!(p.max_travel_m, 1.5);
+        assert_eq!(p.grid_resolution_m, 0.2);
+        assert_eq!(p.rule, planner::PlanRule::Greedy);
+    }
+}

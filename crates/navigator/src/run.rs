@@ -1,0 +1,88 @@
+//! The blocking driver: a [`Navigator`] run against any [`LaserSource`] and [`MotionBase`].
+
+use scan_types::{LaserSource, MotionBase, Pose2, Scan};
+
+use crate::{Action, Leg, Navigator, Outcome, Reason};
+
+/// What a caller watches during [`run`]: recording, evaluation, a live view. Every method
+/// has a default that does nothing.
+pub trait Monitor {
+    /// Every scan the navigator accepted, with the estimate of the pose it was taken at.
+    fn scan(&mut self, _scan: &Scan, _estimate: &Pose2) {}
+    /// Every leg end the navigator recorded, right after the scan that ended it.
+    fn leg(&mut self, _leg: &Leg) {}
+    /// After every completed motion: `Some(note)` ends the run as a collision (a simulator
+    /// knows; a real robot's bumper might).
+    fn collision(&mut self) -> Option<String> {
+        None
+    }
+}
+
+/// A [`Monitor`] that watches nothing.
+#[derive(Debug, Default, Clone, Copy)]
+pub struct NoMonitor;
+
+impl Monitor for NoMonitor {}
+
+/// Runs `nav` to its end: scans from `laser`, motions on `base`, and `stop` sent to the base
+/// however the run ends.
+pub fn run<L, M>(
+    mut nav: Navigator,
+    laser: &mut L,
+    base: &mut M,
+    monitor: &mut dyn Monitor,
+) -> Outcome
+where
+    L: LaserSource + ?Sized,
+    M: MotionBase + ?Sized,
+{
+    let mut action = nav.pending();
+    loop {
+        action = match action {
+            Action::Scan => match laser.next_scan() {
+                Ok(scan) => {
+                    let (pose, scans, legs) = (nav.estimate_now(), nav.scans(), nav.legs().len());
+                    let next = nav.on_scan(&scan);
+                    if nav.scans() > scans {
+                        monitor.scan(&scan, &pose);
+                    }
+                    for leg in &nav.legs()[legs..] {
+                        monitor.leg(leg);
+                    }
+                    next
+                }
+                Err(e) => nav.fail(Reason::SensorFailure, format!("laser: {e}")),
+            },
+            Action::Rotate { angle_rad } => {
+                let done = base.rotate(angle_rad);
+                motion_done(&mut nav, done, monitor)
+            }
+            Action::Forward { distance_m } => {
+                let done = base.forward(distance_m);
+                motion_done(&mut nav, done, monitor)
+            }
+            Action::Finish(_) => break,
+        };
+    }
+    if let Err(e) = base.stop() {
+        tracing::warn!("the base did not take stop: {e}");
+    }
+    nav.into_outcome()
+}
+
+fn motion_done<E: std::fmt::Display>(
+    nav: &mut Navigator,
+    done: Result<(), E>,
+    monitor: &mut dyn Monitor,
+) -> Action {
+    match done {
+        Ok(()) => {
+            let next = nav.on_motion_done();
+            match monitor.collision() {
+                Some(note) => nav.fail(Reason::Collision, note),
+                None => next,
+            }
+        }
+        Err(e) => nav.fail(Reason::SensorFailure, format!("base: {e}")),
+    }
+}
