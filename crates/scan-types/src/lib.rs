@@ -20,6 +20,7 @@
 
 mod angle;
 mod error;
+mod fs;
 mod geometry;
 mod motion;
 mod pose;
@@ -30,6 +31,7 @@ pub mod testkit;
 
 pub use angle::{angle_diff_rad, normalize_angle_rad};
 pub use error::ScanTypesError;
+pub use fs::write_atomic;
 pub use geometry::ScanGeometry;
 pub use motion::MotionBase;
 pub use pose::{Pose2, RobotPoint, WorldPoint};
