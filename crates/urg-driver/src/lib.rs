@@ -1,6 +1,15 @@
 //! Hokuyo SCIP 2.0 driver: a pure codec ([`codec`]), a command port generic over its
 //! transport ([`ScipPort`]), a connected sensor that implements `LaserSource` ([`Urg`],
-//! [`ReconnectingUrg`]) and an emulator of the sensor side ([`Emulator`], [`serve_pty`]).
+//! [`ReconnectingUrg`]) and, behind a cargo feature, an emulator of the sensor side
+//! (`Emulator`, `serve_pty`).
+//!
+//! # Features
+//!
+//! - `emulator` (off by default): the `emulator` module, an emulated URG-04LX or UTM-30LX
+//!   usable in memory as a transport or served on a pseudo-terminal, with its items
+//!   re-exported at the crate root. A robot build of the driver leaves it out; simulator
+//!   runs, tests and tools turn it on (`urg-driver = { ..., features = ["emulator"] }`).
+//! - `hardware-tests`: runs `tests/hardware.rs` against a real sensor.
 //!
 //! The driver owns its transport (`T: Read + Write`, given back by `into_inner`); opening a
 //! real port goes through [`Urg::open`] (the `serialport` crate). Ranges come out in metres:
@@ -8,6 +17,8 @@
 //! code 0 ("no return"), which is `RayStatus::MaxRange`.
 //!
 //! ```
+//! # #[cfg(feature = "emulator")]
+//! # fn main() {
 //! use scan_types::{LaserSource, RayStatus};
 //! use urg_driver::{AcquisitionMode, Emulator, Model, Urg, UrgConfig};
 //!
@@ -20,10 +31,14 @@
 //! // One sensor period (100 ms) between streamed scans.
 //! assert_eq!(b.sensor_time_ms.unwrap() - a.sensor_time_ms.unwrap(), 100);
 //! assert_eq!(a.status[84], RayStatus::Error(7));
+//! # }
+//! # #[cfg(not(feature = "emulator"))]
+//! # fn main() {}
 //! ```
 
 pub mod codec;
 mod driver;
+#[cfg(feature = "emulator")]
 pub mod emulator;
 mod error;
 mod info;
@@ -35,6 +50,7 @@ pub use driver::{
     AcquisitionMode, Backoff, ReconnectingUrg, SerialTransport, Urg, UrgConfig,
     connect_with_backoff, host_now_s, open_serial,
 };
+#[cfg(feature = "emulator")]
 pub use emulator::{
     Emulator, EmulatorControl, Fault, FixedSource, Model, Profile, PtyServer, SensorCore,
     serve_pty, serve_pty_with,

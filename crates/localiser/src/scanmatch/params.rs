@@ -1,0 +1,85 @@
+//! Scan matching parameters and the result of a match.
+
+use scan_types::Pose2;
+
+/// Tuning of [`MatchTarget::align`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MatchParams {
+    /// Most Gauss-Newton iterations.
+    pub max_iterations: usize,
+    /// Correspondence gate of the first iteration, metres (covers the guess's error).
+    pub initial_gate_m: f64,
+    /// The gate shrinks by this factor per iteration down to `final_gate_m`.
+    pub gate_shrink: f64,
+    /// Correspondence gate once converged, metres.
+    pub final_gate_m: f64,
+    /// Scale of the Cauchy weight of a point-to-line residual, metres.
+    pub robust_scale_m: f64,
+    /// Standard deviation of one point-to-line residual, metres (weights data against the prior).
+    pub point_sigma_m: f64,
+    /// Standard deviation of the guess's position, metres.
+    pub prior_sigma_m: f64,
+    /// Standard deviation of the guess's heading, radians.
+    pub prior_sigma_rad: f64,
+    /// Fewest matched points (within the final gate) for a result.
+    pub min_pairs: usize,
+    /// Largest RMS point-to-line residual of the matched points, metres.
+    pub max_rms_m: f64,
+    /// Neighbouring hits within this of each other lie on one surface, metres.
+    pub surface_m: f64,
+    /// A hit's surface line is fitted over the hits of its surface within this distance of
+    /// it on each side, metres.
+    pub normal_half_length_m: f64,
+    /// At most this many rays on each side enter the fit.
+    pub normal_rays: usize,
+    /// Matched normals must agree within this angle, radians (front and back of a thin wall).
+    pub max_normal_angle_rad: f64,
+    /// Every `stride`-th hit of the scan being aligned enters the fit, weighted `stride`
+    /// times (neighbouring hits on one surface say almost the same); the target keeps all.
+    pub stride: usize,
+}
+
+impl Default for MatchParams {
+    /// 40 iterations, gate 0.3 m shrinking by 0.7 to 0.06 m, 2 cm Cauchy scale and point
+    /// sigma, prior 0.1 m / 2 deg, 40 pairs, RMS at most 3 cm, each hit's surface line fitted
+    /// over +-0.1 m (at most 30 rays a side, neighbours within 0.15 m), normals within 60 deg,
+    /// every second hit of the aligned scan.
+    fn default() -> Self {
+        Self {
+            max_iterations: 40,
+            initial_gate_m: 0.3,
+            gate_shrink: 0.7,
+            final_gate_m: 0.06,
+            robust_scale_m: 0.02,
+            point_sigma_m: 0.02,
+            prior_sigma_m: 0.1,
+            prior_sigma_rad: 2f64.to_radians(),
+            min_pairs: 40,
+            max_rms_m: 0.03,
+            surface_m: 0.15,
+            normal_half_length_m: 0.1,
+            normal_rays: 30,
+            max_normal_angle_rad: 60f64.to_radians(),
+            stride: 2,
+        }
+    }
+}
+
+/// The result of a match.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ScanMatch {
+    /// The pose of the matched scan in the target's frame.
+    pub pose: Pose2,
+    /// RMS point-to-line residual of the matched points, metres.
+    pub rms_m: f64,
+    /// Hits matched within the final gate (each used point counts `stride` times).
+    pub pairs: usize,
+    /// Standard deviation of the position along its worst-constrained direction (data and
+    /// prior together), metres: near `prior_sigma_m` in a featureless corridor.
+    pub worst_sigma_m: f64,
+    /// Standard deviation of the position along its worst-constrained direction from the
+    /// data alone, metres (infinite when the data leave a direction free).
+    pub data_worst_sigma_m: f64,
+    /// Iterations run.
+    pub iterations: usize,
+}
