@@ -9,7 +9,9 @@ use scan_types::LaserSource;
 use urg_driver::{Urg, UrgConfig};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let port = std::env::args().nth(1).unwrap_or_else(|| "/dev/ttyACM0".into());
+    let port = std::env::args()
+        .nth(1)
+        .unwrap_or_else(|| "/dev/ttyACM0".into());
     let mut urg = Urg::open(&port, UrgConfig::default())?;
     let geometry = *urg.geometry();
     let scan = urg.next_scan()?;

@@ -10,9 +10,19 @@ use scan_types::{LaserSource, MotionBase};
 use sim_laser::{SensorPreset, Simulation, World, paper_start, paper_target};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let sim = Simulation::with_preset(Arc::new(World::paper()), SensorPreset::Paper, paper_start(), 0);
+    let sim = Simulation::with_preset(
+        Arc::new(World::paper()),
+        SensorPreset::Paper,
+        paper_start(),
+        0,
+    );
     let (mut laser, mut base, truth) = sim.split();
-    let mut nav = Navigator::new(Params::goalseek(), *laser.geometry(), paper_start(), paper_target())?;
+    let mut nav = Navigator::new(
+        Params::goalseek(),
+        *laser.geometry(),
+        paper_start(),
+        paper_target(),
+    )?;
     // Answer each action until the navigator finishes.
     let mut action = nav.pending();
     while !matches!(action, Action::Finish(_)) {

@@ -39,6 +39,8 @@ enum Command {
     Replay(cmd::replay::ReplayArgs),
     /// Build an occupancy grid from a log that carries poses.
     Map(cmd::map::MapArgs),
+    /// Estimate a trajectory and a map from a log's scans alone (laser-only SLAM).
+    Slam(cmd::slam::SlamArgs),
     /// Run landmark detection and tracking over a log and report statistics.
     Landmarks(cmd::landmarks::LandmarksArgs),
     /// Generate seeded random worlds for batch evaluation.
@@ -59,6 +61,7 @@ fn main() -> ExitCode {
         Command::Replay(a) => cmd::replay::run(a),
         Command::Map(a) => cmd::map::run(a),
         Command::Landmarks(a) => cmd::landmarks::run(a),
+        Command::Slam(a) => cmd::slam::run(a),
         Command::World(a) => cmd::world::run(a),
     };
     match result {

@@ -10,6 +10,7 @@ pub mod replay;
 pub mod run;
 pub mod scan;
 pub mod sim;
+pub mod slam;
 pub mod world;
 
 use std::path::PathBuf;

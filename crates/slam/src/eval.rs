@@ -1,0 +1,201 @@
+//! Trajectory evaluation against reference poses, as the SLAM literature measures: relative
+//! pose errors over relations `k -> k + delta` and the absolute trajectory error after an
+//! SE(2) alignment (the figures `evo_rpe` and `evo_ape -a` print for the same TUM files).
+
+use scan_types::{Pose2, angle_diff_rad};
+use serde::Serialize;
+
+use crate::SlamError;
+
+/// Mean and population standard deviation of a set of errors.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Stats {
+    /// Mean.
+    pub mean: f64,
+    /// Standard deviation (population).
+    pub std: f64,
+    /// Root mean square.
+    pub rmse: f64,
+    /// Largest.
+    pub max: f64,
+    /// How many.
+    pub count: usize,
+}
+
+impl Stats {
+    /// The statistics of `values` (all zero for none).
+    pub fn of(values: &[f64]) -> Stats {
+        let n = values.len();
+        if n == 0 {
+            return Stats {
+                mean: 0.0,
+                std: 0.0,
+                rmse: 0.0,
+                max: 0.0,
+                count: 0,
+            };
+        }
+        let mean = values.iter().sum::<f64>() / n as f64;
+        let var = values.iter().map(|v| (v - mean) * (v - mean)).sum::<f64>() / n as f64;
+        let sq = values.iter().map(|v| v * v).sum::<f64>() / n as f64;
+        Stats {
+            mean,
+            std: var.sqrt(),
+            rmse: sq.sqrt(),
+            max: values.iter().copied().fold(0.0, f64::max),
+            count: n,
+        }
+    }
+}
+
+/// Relative pose errors over the relations `k -> k + delta`: translation (metres) and
+/// rotation (degrees) of `(ref_k^-1 ref_k+d)^-1 (est_k^-1 est_k+d)`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct RelativeError {
+    /// The relation's step, in poses.
+    pub delta: usize,
+    /// Translational error, metres.
+    pub translation_m: Stats,
+    /// Rotational error, degrees.
+    pub rotation_deg: Stats,
+}
+
+fn same_length(est: &[Pose2], reference: &[Pose2]) -> Result<(), SlamError> {
+    if est.len() != reference.len() {
+        return Err(SlamError::LengthMismatch {
+            estimate: est.len(),
+            reference: reference.len(),
+        });
+    }
+    Ok(())
+}
+
+/// The relative pose error of `est` against `reference` (same length, pose for pose).
+pub fn relative_error(
+    est: &[Pose2],
+    reference: &[Pose2],
+    delta: usize,
+) -> Result<RelativeError, SlamError> {
+    same_length(est, reference)?;
+    if delta == 0 || est.len() <= delta {
+        return Err(SlamError::TooFewPoses {
+            what: "a relative error",
+            needed: delta.max(1) + 1,
+            got: est.len(),
+        });
+    }
+    let (mut t, mut r) = (Vec::new(), Vec::new());
+    for k in 0..est.len() - delta {
+        let de = est[k].inverse().compose(&est[k + delta]);
+        let dr = reference[k].inverse().compose(&reference[k + delta]);
+        let e = dr.inverse().compose(&de);
+        t.push(e.x_m.hypot(e.y_m));
+        r.push(e.theta_rad.abs().to_degrees());
+    }
+    Ok(RelativeError {
+        delta,
+        translation_m: Stats::of(&t),
+        rotation_deg: Stats::of(&r),
+    })
+}
+
+/// The rigid motion (rotation, then translation) that best maps `est`'s positions onto
+/// `reference`'s, in least squares.
+pub fn align_se2(est: &[Pose2], reference: &[Pose2]) -> Result<Pose2, SlamError> {
+    same_length(est, reference)?;
+    if est.len() < 2 {
+        return Err(SlamError::TooFewPoses {
+            what: "an alignment",
+            needed: 2,
+            got: est.len(),
+        });
+    }
+    let n = est.len() as f64;
+    let mean = |ps: &[Pose2]| {
+        let (x, y) = ps
+            .iter()
+            .fold((0.0, 0.0), |(x, y), p| (x + p.x_m, y + p.y_m));
+        (x / n, y / n)
+    };
+    let (ex, ey) = mean(est);
+    let (rx, ry) = mean(reference);
+    // The rotation maximising sum (R e_i) . r_i over centred points.
+    let (mut dot, mut cross) = (0.0, 0.0);
+    for (e, r) in est.iter().zip(reference) {
+        let (ax, ay) = (e.x_m - ex, e.y_m - ey);
+        let (bx, by) = (r.x_m - rx, r.y_m - ry);
+        dot += ax * bx + ay * by;
+        cross += ax * by - ay * bx;
+    }
+    let theta = cross.atan2(dot);
+    let (s, c) = theta.sin_cos();
+    Ok(Pose2::new(
+        rx - (c * ex - s * ey),
+        ry - (s * ex + c * ey),
+        theta,
+    ))
+}
+
+/// The absolute trajectory error: position error (metres) of every pose of `est` after the
+/// SE(2) alignment onto `reference`.
+pub fn absolute_error(est: &[Pose2], reference: &[Pose2]) -> Result<Stats, SlamError> {
+    let a = align_se2(est, reference)?;
+    let errors: Vec<f64> = est
+        .iter()
+        .zip(reference)
+        .map(|(e, r)| a.compose(e).position().distance_m(&r.position()))
+        .collect();
+    Ok(Stats::of(&errors))
+}
+
+/// The heading difference of two poses, degrees (for reports).
+pub fn heading_error_deg(a: &Pose2, b: &Pose2) -> f64 {
+    angle_diff_rad(a.theta_rad, b.theta_rad).abs().to_degrees()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn relative_error_of_a_hand_made_pair() {
+        // The reference steps 1 m ahead each time; the estimate steps 1.1 m: every relation
+        // k -> k+1 is 0.1 m off, k -> k+2 0.2 m, with no rotation error.
+        let reference: Vec<Pose2> = (0..5).map(|i| Pose2::new(i as f64, 0.0, 0.0)).collect();
+        let est: Vec<Pose2> = (0..5)
+            .map(|i| Pose2::new(1.1 * i as f64, 0.0, 0.0))
+            .collect();
+        let r1 = relative_error(&est, &reference, 1).unwrap();
+        assert!((r1.translation_m.mean - 0.1).abs() < 1e-12);
+        assert!(r1.translation_m.std < 1e-12);
+        assert_eq!(r1.translation_m.count, 4);
+        let r2 = relative_error(&est, &reference, 2).unwrap();
+        assert!((r2.translation_m.mean - 0.2).abs() < 1e-12);
+        assert!(r2.rotation_deg.max < 1e-12);
+        assert!(relative_error(&est, &reference[..4], 1).is_err());
+        assert!(relative_error(&est, &reference, 5).is_err());
+    }
+
+    #[test]
+    fn alignment_undoes_a_rigid_motion() {
+        // A square path moved by 30 deg and (2, -1): aligned, the error vanishes.
+        let reference: Vec<Pose2> = [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)]
+            .iter()
+            .map(|&(x, y)| Pose2::new(x, y, 0.0))
+            .collect();
+        let m = Pose2::new(2.0, -1.0, 30f64.to_radians());
+        let est: Vec<Pose2> = reference.iter().map(|p| m.compose(p)).collect();
+        let a = align_se2(&est, &reference).unwrap();
+        assert!(
+            a.compose(&m)
+                .position()
+                .distance_m(&Pose2::default().position())
+                < 1e-12
+        );
+        assert!(absolute_error(&est, &reference).unwrap().max < 1e-12);
+        // Unaligned the first pose would be sqrt(5) m off.
+        assert!(
+            (est[0].position().distance_m(&reference[0].position()) - 5f64.sqrt()).abs() < 1e-12
+        );
+    }
+}

@@ -1,0 +1,393 @@
+//! The front end: each scan placed against a local submap of recent keyframes, by a wide
+//! correlative search around a constant-velocity prediction, refined by point-to-line ICP.
+
+use std::collections::VecDeque;
+
+use localiser::{MatchParams, MatchTarget};
+use scan_types::{Pose2, Scan, ScanGeometry, angle_diff_rad};
+use serde::{Deserialize, Serialize};
+
+use crate::SlamError;
+use crate::correlative::{Window, search};
+use crate::grid::ScoreGrid;
+
+/// Tuning of the [`FrontEnd`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct FrontEndParams {
+    /// Cell size of the correlative search's likelihood field, metres.
+    pub resolution_m: f64,
+    /// Gaussian fall-off of the field around each submap point, metres.
+    pub smoothing_m: f64,
+    /// Half-width of the translation search around the prediction, metres.
+    pub linear_window_m: f64,
+    /// Half-width of the rotation search around the prediction, degrees.
+    pub angular_window_deg: f64,
+    /// Quality lost per square metre of the pose away from the prediction (keeps a corridor's
+    /// scan where the motion puts it).
+    pub translation_cost: f64,
+    /// Quality lost per square radian away from the prediction.
+    pub rotation_cost: f64,
+    /// Max-pooled levels of the branch and bound (blocks of 2^depth cells at the top).
+    pub depth: usize,
+    /// A scan whose best pose scores below this (mean field value of its points, 0..1) is
+    /// skipped.
+    pub min_quality: f64,
+    /// Fewest usable hits for a scan to be matched.
+    pub min_points: usize,
+    /// Hits nearer than this are not used, metres.
+    pub min_range_m: f64,
+    /// Hits farther than this are not used, metres.
+    pub max_range_m: f64,
+    /// Hits are thinned to one per cell of this size before the search, metres.
+    pub voxel_m: f64,
+    /// A placed scan becomes a keyframe of the submap when it is this far from the last one,
+    /// metres ...
+    pub keyframe_distance_m: f64,
+    /// ... or turned this much from it, degrees.
+    pub keyframe_angle_deg: f64,
+    /// Keyframes in the submap.
+    pub submap_keyframes: usize,
+    /// Refine the correlative pose by point-to-line ICP against the submap's scans.
+    pub refine: bool,
+    /// A refinement that moves the correlative pose by more than this is refused, metres.
+    pub max_refine_shift_m: f64,
+    /// Neighbouring hits within this of each other lie on one surface for the refinement,
+    /// metres.
+    pub icp_surface_m: f64,
+    /// A refinement whose field score falls more than this below the correlative pose's is
+    /// refused.
+    pub max_refine_loss: f64,
+}
+
+impl Default for FrontEndParams {
+    fn default() -> Self {
+        Self {
+            resolution_m: 0.1,
+            smoothing_m: 0.2,
+            linear_window_m: 1.6,
+            angular_window_deg: 80.0,
+            translation_cost: 0.1,
+            rotation_cost: 0.1,
+            depth: 4,
+            min_quality: 0.45,
+            min_points: 20,
+            min_range_m: 0.05,
+            max_range_m: 20.0,
+            voxel_m: 0.05,
+            keyframe_distance_m: 0.3,
+            keyframe_angle_deg: 10.0,
+            submap_keyframes: 12,
+            refine: true,
+            max_refine_shift_m: 0.2,
+            icp_surface_m: 0.3,
+            max_refine_loss: 0.05,
+        }
+    }
+}
+
+impl FrontEndParams {
+    /// Checks every value against its range; the error names the key.
+    pub fn validate(&self) -> Result<(), SlamError> {
+        let bad = |key, value: f64, requirement| SlamError::InvalidParam {
+            key,
+            value: value.to_string(),
+            requirement,
+        };
+        for (key, v) in [
+            ("resolution_m", self.resolution_m),
+            ("smoothing_m", self.smoothing_m),
+            ("max_range_m", self.max_range_m),
+            ("voxel_m", self.voxel_m),
+            ("max_refine_shift_m", self.max_refine_shift_m),
+        ] {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(bad(key, v, "must be a positive number"));
+            }
+        }
+        for (key, v) in [
+            ("linear_window_m", self.linear_window_m),
+            ("angular_window_deg", self.angular_window_deg),
+            ("min_range_m", self.min_range_m),
+            ("keyframe_distance_m", self.keyframe_distance_m),
+            ("keyframe_angle_deg", self.keyframe_angle_deg),
+            ("translation_cost", self.translation_cost),
+            ("rotation_cost", self.rotation_cost),
+        ] {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(bad(key, v, "must be a number >= 0"));
+            }
+        }
+        if !(0.0..=1.0).contains(&self.min_quality) {
+            return Err(bad("min_quality", self.min_quality, "must lie in 0..1"));
+        }
+        if self.resolution_m < 0.01 || self.linear_window_m / self.resolution_m > 1000.0 {
+            return Err(bad(
+                "resolution_m",
+                self.resolution_m,
+                "must be at least 0.01 and at least linear_window_m / 1000",
+            ));
+        }
+        if self.angular_window_deg > 180.0 {
+            return Err(bad(
+                "angular_window_deg",
+                self.angular_window_deg,
+                "must be at most 180",
+            ));
+        }
+        if self.depth > 10 {
+            return Err(bad("depth", self.depth as f64, "must be at most 10"));
+        }
+        if self.submap_keyframes == 0 {
+            return Err(bad("submap_keyframes", 0.0, "must be at least 1"));
+        }
+        Ok(())
+    }
+}
+
+/// Where one scan was placed, or why it was not.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Placement {
+    /// The scan's pose, in the frame of the first scan.
+    Placed {
+        /// The pose.
+        pose: Pose2,
+        /// The correlative score of the pose (mean field value of its points, 0..1).
+        quality: f64,
+        /// True when ICP refined the pose (false: the correlative pose, good to about a cell).
+        refined: bool,
+        /// True when the scan became a keyframe of the submap.
+        keyframe: bool,
+    },
+    /// The scan could not be placed and was left out.
+    Skipped {
+        /// Why.
+        reason: SkipReason,
+    },
+}
+
+/// Why a scan was not placed.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum SkipReason {
+    /// Fewer usable hits than [`FrontEndParams::min_points`].
+    TooFewHits {
+        /// Usable hits.
+        hits: usize,
+    },
+    /// No pose in the window scored [`FrontEndParams::min_quality`].
+    NoMatch,
+}
+
+impl std::fmt::Display for SkipReason {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            SkipReason::TooFewHits { hits } => write!(f, "only {hits} usable hits"),
+            SkipReason::NoMatch => f.write_str("no pose in the window matched the submap"),
+        }
+    }
+}
+
+/// A scan kept in the submap.
+#[derive(Debug, Clone)]
+struct Keyframe {
+    pose: Pose2,
+    geometry: ScanGeometry,
+    scan: Scan,
+    /// Thinned hits, world frame.
+    points: Vec<[f64; 2]>,
+}
+
+/// Laser-only pose tracking: feed scans in order, get their poses.
+#[derive(Debug)]
+pub struct FrontEnd {
+    params: FrontEndParams,
+    match_params: MatchParams,
+    keyframes: VecDeque<Keyframe>,
+    grid: Option<ScoreGrid>,
+    target: MatchTarget,
+    /// The last two placed poses (the older first).
+    last: Option<Pose2>,
+    before_last: Option<Pose2>,
+}
+
+impl FrontEnd {
+    /// A front end whose first scan is placed at the origin.
+    pub fn new(params: FrontEndParams) -> Result<Self, SlamError> {
+        params.validate()?;
+        let surface_m = params.icp_surface_m;
+        Ok(Self {
+            params,
+            // Real scans with 1 deg rays: neighbouring hits of one wall lie far apart at range.
+            match_params: MatchParams {
+                max_rms_m: 0.05,
+                surface_m,
+                normal_half_length_m: surface_m * 0.6,
+                min_pairs: 30,
+                ..MatchParams::default()
+            },
+            keyframes: VecDeque::new(),
+            grid: None,
+            target: MatchTarget::new(),
+            last: None,
+            before_last: None,
+        })
+    }
+
+    /// The parameters.
+    pub fn params(&self) -> &FrontEndParams {
+        &self.params
+    }
+
+    /// Places the next scan (of `geometry`).
+    pub fn add_scan(&mut self, geometry: &ScanGeometry, scan: &Scan) -> Placement {
+        let points = thin_hits(geometry, scan, &self.params);
+        if points.len() < self.params.min_points {
+            return Placement::Skipped {
+                reason: SkipReason::TooFewHits { hits: points.len() },
+            };
+        }
+        let (Some(last), Some(grid)) = (self.last, self.grid.as_ref()) else {
+            let pose = Pose2::default();
+            self.place(pose, geometry, scan, &points, true);
+            return Placement::Placed {
+                pose,
+                quality: 1.0,
+                refined: false,
+                keyframe: true,
+            };
+        };
+        // Constant velocity: the last step again.
+        let guess = match self.before_last {
+            Some(b) => last.compose(&b.inverse().compose(&last)),
+            None => last,
+        };
+        let window = Window {
+            linear_m: self.params.linear_window_m,
+            angular_rad: self.params.angular_window_deg.to_radians(),
+            translation_cost: self.params.translation_cost,
+            rotation_cost: self.params.rotation_cost,
+        };
+        let Some(found) = search(grid, &points, &guess, &window, self.params.min_quality) else {
+            return Placement::Skipped {
+                reason: SkipReason::NoMatch,
+            };
+        };
+        let (pose, refined) = self.refine(geometry, scan, found.pose);
+        let refined_quality = self
+            .grid
+            .as_ref()
+            .map_or(0.0, |g| crate::correlative::quality(g, &points, &pose));
+        let (pose, refined) = if refined
+            && refined_quality < found.quality - self.params.max_refine_loss
+        {
+            (found.pose, false)
+        } else {
+            (pose, refined)
+        };
+        let keyframe = self.is_keyframe(&pose);
+        self.place(pose, geometry, scan, &points, keyframe);
+        Placement::Placed {
+            pose,
+            quality: found.quality,
+            refined,
+            keyframe,
+        }
+    }
+
+    /// ICP from the correlative pose; the correlative pose when ICP fails or wanders.
+    fn refine(&mut self, geometry: &ScanGeometry, scan: &Scan, coarse: Pose2) -> (Pose2, bool) {
+        if !self.params.refine {
+            return (coarse, false);
+        }
+        match self
+            .target
+            .align(geometry, scan, coarse, &self.match_params)
+        {
+            Some(m)
+                if m.pose.position().distance_m(&coarse.position())
+                    <= self.params.max_refine_shift_m =>
+            {
+                (m.pose, true)
+            }
+            _ => (coarse, false),
+        }
+    }
+
+    fn is_keyframe(&self, pose: &Pose2) -> bool {
+        self.keyframes.back().is_none_or(|k| {
+            k.pose.position().distance_m(&pose.position()) >= self.params.keyframe_distance_m
+                || angle_diff_rad(k.pose.theta_rad, pose.theta_rad).abs()
+                    >= self.params.keyframe_angle_deg.to_radians()
+        })
+    }
+
+    /// Records the placed pose; a keyframe enters the submap, which is then rebuilt.
+    fn place(
+        &mut self,
+        pose: Pose2,
+        geometry: &ScanGeometry,
+        scan: &Scan,
+        points: &[[f64; 2]],
+        keyframe: bool,
+    ) {
+        self.before_last = self.last;
+        self.last = Some(pose);
+        if !keyframe {
+            return;
+        }
+        let (s, c) = pose.theta_rad.sin_cos();
+        let world = points
+            .iter()
+            .map(|p| {
+                [
+                    pose.x_m + c * p[0] - s * p[1],
+                    pose.y_m + s * p[0] + c * p[1],
+                ]
+            })
+            .collect();
+        self.keyframes.push_back(Keyframe {
+            pose,
+            geometry: *geometry,
+            scan: scan.clone(),
+            points: world,
+        });
+        while self.keyframes.len() > self.params.submap_keyframes {
+            self.keyframes.pop_front();
+        }
+        let all: Vec<[f64; 2]> = self
+            .keyframes
+            .iter()
+            .flat_map(|k| k.points.iter().copied())
+            .collect();
+        let p = &self.params;
+        let window_cells = (p.linear_window_m / p.resolution_m).ceil() as usize + 1;
+        self.grid = ScoreGrid::new(&all, p.resolution_m, p.smoothing_m, p.depth, window_cells);
+        if p.refine {
+            self.target = MatchTarget::new();
+            for k in &self.keyframes {
+                self.target
+                    .add_scan(&k.pose, &k.geometry, &k.scan, &self.match_params);
+            }
+        }
+    }
+}
+
+/// The scan's hits within the range limits, robot frame, one per `voxel_m` cell (the first).
+fn thin_hits(geometry: &ScanGeometry, scan: &Scan, params: &FrontEndParams) -> Vec<[f64; 2]> {
+    let mut out: Vec<[f64; 2]> = Vec::new();
+    let mut seen = std::collections::HashSet::new();
+    for (_, p) in scan.robot_hits(geometry) {
+        let r = p.range_m();
+        if !(r >= params.min_range_m && r <= params.max_range_m) {
+            continue;
+        }
+        let key = (
+            (p.x_m() / params.voxel_m).floor() as i64,
+            (p.y_m() / params.voxel_m).floor() as i64,
+        );
+        if seen.insert(key) {
+            out.push([p.x_m(), p.y_m()]);
+        }
+    }
+    out
+}

@@ -1,0 +1,18 @@
+//! Laser-only pose tracking and trajectory evaluation.
+//!
+//! [`FrontEnd`] places each scan against a local submap of recent keyframes: a wide
+//! correlative search (branch and bound over a max-pooled likelihood field) around a
+//! constant-velocity prediction, refined by the point-to-line ICP of `localiser`. It never
+//! reads odometry: the laser alone decides where the robot is. A scan that cannot be placed is
+//! reported as [`Placement::Skipped`], never placed silently. [`eval`] measures a trajectory
+//! against reference poses.
+#![warn(missing_docs)]
+
+mod correlative;
+mod error;
+pub mod eval;
+mod frontend;
+mod grid;
+
+pub use error::SlamError;
+pub use frontend::{FrontEnd, FrontEndParams, Placement, SkipReason};
