@@ -22,9 +22,8 @@ use landmarks::{Tracker, detect, select};
 use localiser::OccupancyGrid;
 use navigator::{Action, Monitor, Navigator, Params};
 use planner::Planner;
-use robot_app::simsetup::{paper_start, paper_target};
 use scan_types::{LaserSource, Pose2, Scan, ScanGeometry, WorldPoint};
-use sim_laser::{MotionNoise, SensorPreset, Simulation, World};
+use sim_laser::{MotionNoise, SensorPreset, Simulation, World, paper_start, paper_target};
 
 /// Scans before and after a rotation, and after one 5 cm tracking step, at one pose.
 struct Stop {
@@ -50,10 +49,9 @@ fn stops(g: &ScanGeometry) -> Vec<Stop> {
     let (mut laser, _base, truth) = sim.split();
     assert_eq!(laser.geometry(), g);
     // The paper's start and a pose near its first point B.
-    [(-3.92, -4.26, 45f64), (-2.09, -2.34, 50.0)]
-        .iter()
-        .map(|&(x, y, deg)| {
-            let pose = Pose2::new(x, y, deg.to_radians());
+    [paper_start(), Pose2::new(-2.09, -2.34, 50f64.to_radians())]
+        .into_iter()
+        .map(|pose| {
             truth.teleport(pose);
             let before = laser.next_scan().unwrap();
             let turned = pose.rotated(TURN_RAD);

@@ -13,8 +13,6 @@ use std::hint::black_box;
 #[path = "common/paper_world.rs"]
 mod paper_world;
 
-use paper_world::POSES;
-
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use expansion::{Expander, clearances_reference};
 use rand::{Rng, SeedableRng};
@@ -61,7 +59,7 @@ fn bench_expansion(c: &mut Criterion) {
     let world = World::paper();
     for (label, g) in sensors() {
         let mut sets: Vec<(&str, Vec<Scan>)> = vec![("random", random_scans(&g, 4, 7))];
-        let scans = POSES
+        let scans = paper_world::poses()
             .iter()
             .map(|&(x, y, h)| paper_world::scan(&world, &g, x, y, h))
             .collect();

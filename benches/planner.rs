@@ -9,8 +9,6 @@ use std::hint::black_box;
 #[path = "common/paper_world.rs"]
 mod paper_world;
 
-use paper_world::POSES;
-
 use criterion::{Criterion, criterion_group, criterion_main};
 use expansion::Expander;
 use planner::{PlanRule, Planner, PlannerParams};
@@ -19,7 +17,7 @@ use scan_types::{Pose2, ScanGeometry, WorldPoint};
 fn bench_planner(c: &mut Criterion) {
     let world = sim_laser::World::paper();
     let g = ScanGeometry::paper();
-    let scans: Vec<_> = POSES
+    let scans: Vec<_> = paper_world::poses()
         .iter()
         .map(|&(x, y, h)| (Pose2::new(x, y, h), paper_world::scan(&world, &g, x, y, h)))
         .collect();

@@ -49,7 +49,7 @@ fn cluttered(n: usize, seed: u64) -> World {
 fn paper(c: &mut Criterion) {
     let world = World::paper();
     let g = SensorPreset::Paper.geometry();
-    let start = Pose2::new(-3.92, -4.26, 45f64.to_radians());
+    let start = sim_laser::paper_start();
     c.bench_function("paper_scan_685_rays_noise_free", |b| {
         b.iter(|| true_scan(black_box(&world), black_box(&start), &g))
     });

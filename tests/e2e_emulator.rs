@@ -13,9 +13,10 @@ use std::sync::Arc;
 
 use navigator::{Method, Params};
 use robot_app::runloop::{LoopRun, run_loop};
-use robot_app::simsetup::{paper_start, paper_target};
 use scan_types::{LaserSource, MotionBase, RayStatus, Scan, ScanGeometry};
-use sim_laser::{MotionNoise, SensorPreset, Simulation, TruthHandle, World};
+use sim_laser::{
+    MotionNoise, SensorPreset, Simulation, TruthHandle, World, paper_start, paper_target,
+};
 use urg_driver::{Emulator, Model, Profile, Urg, UrgConfig};
 
 /// The URG-04LX's distance limits (PP: DMIN 20 mm, DMAX 5600 mm).

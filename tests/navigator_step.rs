@@ -5,9 +5,11 @@
 use std::sync::Arc;
 
 use navigator::{Action, Navigator, Outcome, Params, Phase, Reason};
-use robot_app::simsetup::{paper_start, paper_target};
 use scan_types::{MotionBase, Pose2, WorldPoint};
-use sim_laser::{LaserNoise, MotionNoise, SensorPreset, Simulation, World, WorldDescription};
+use sim_laser::{
+    LaserNoise, MotionNoise, SensorPreset, Simulation, World, WorldDescription, WorldKind,
+    generated_world, paper_start, paper_target,
+};
 
 fn simulation(world: Arc<World>, params: &Params, start: Pose2, seed: u64) -> Simulation {
     let preset = SensorPreset::Paper;
@@ -269,9 +271,7 @@ fn a_box_left_behind_by_a_turn_in_place_is_not_turned_back_into() {
     // the spot, the robot ended a leg 0.40 m from a box, turned so that the box left the
     // view, planned into it, saw it after the turn (no room ahead), and turned away again:
     // 8 failed tries, `unreachable` 4.33 m from the target.
-    let (world, _, _) =
-        robot_app::cmd::batch::generated_world(robot_app::cmd::batch::WorldKind::Random, 3)
-            .unwrap();
+    let (world, _, _) = generated_world(WorldKind::Random, 3).unwrap();
     let start = Pose2::new(5.05, -3.75, 24.326020170693653f64.to_radians());
     let goal = WorldPoint::new(-1.65, 1.75);
     let world = Arc::new(world);

@@ -16,7 +16,6 @@ use robot_app::record::{
 use robot_app::runloop::run_loop;
 use scan_log::read_mcap;
 use scan_types::{Pose2, Scan};
-use sim_laser::{MotionNoise, Simulation};
 
 fn paper_spec() -> SimSpec {
     SimSpec::paper(0, robot_app::config::load(None, None).unwrap())
@@ -24,13 +23,13 @@ fn paper_spec() -> SimSpec {
 
 fn settings_of(spec: &SimSpec) -> RunSettings {
     RunSettings {
-        start: spec.start,
+        start: spec.setup.start,
         goal: spec.goal,
         config: spec.config.clone(),
-        world: spec.world_name.clone(),
-        sensor: spec.sensor.name().into(),
-        seed: spec.seed,
-        noise: spec.noise,
+        world: spec.setup.world_name.clone(),
+        sensor: spec.setup.sensor.name().into(),
+        seed: spec.setup.seed,
+        noise: spec.setup.noise,
     }
 }
 
@@ -69,16 +68,9 @@ fn replay_args(file: std::path::PathBuf) -> ReplayArgs {
 fn replayed_paper_run_gives_the_same_commands_and_legs() {
     let spec = paper_spec();
     let cfg = &spec.config;
-    let sim = Simulation::new(
-        spec.world.clone(),
-        spec.sensor,
-        spec.sensor.default_noise(),
-        MotionNoise::default(),
-        cfg.robot.radius_m,
-        spec.start,
-        spec.seed,
-    );
-    let geometry = spec.sensor.geometry();
+    // The paper's setup: noise on, the configuration's robot radius.
+    let sim = spec.setup.build().unwrap();
+    let geometry = spec.setup.sensor.geometry();
     let (mut laser, base, truth) = sim.split();
     let mut base = LoggingBase::new(base);
     let dir = tempfile::tempdir().unwrap();
@@ -96,7 +88,7 @@ fn replayed_paper_run_gives_the_same_commands_and_legs() {
         &mut laser,
         &mut base,
         cfg,
-        (spec.start, spec.goal),
+        (spec.setup.start, spec.goal),
         Some(&truth),
         Some(&mut hook),
     )
@@ -121,8 +113,8 @@ fn replayed_paper_run_gives_the_same_commands_and_legs() {
         assert_eq!(r.pose.map(pose_bits), Some(pose_bits(*e)), "scan {k}");
     }
     // The first scan is taken at the start, where estimate and truth agree.
-    assert_eq!(pose_bits(written[0].1), pose_bits(spec.start));
-    assert_eq!(pose_bits(written[0].2), pose_bits(spec.start));
+    assert_eq!(pose_bits(written[0].1), pose_bits(spec.setup.start));
+    assert_eq!(pose_bits(written[0].2), pose_bits(spec.setup.start));
     // The estimate follows the robot between leg ends (moved by each command), so nearly
     // every scan carries a new estimate.
     let distinct = written.windows(2).filter(|w| w[0].2 != w[1].2).count();
@@ -142,7 +134,7 @@ fn replayed_paper_run_gives_the_same_commands_and_legs() {
     );
 
     // Replay through the loop.
-    let replay = replay_loop(&path, cfg, spec.start, spec.goal).unwrap();
+    let replay = replay_loop(&path, cfg, spec.setup.start, spec.goal).unwrap();
     let r = &replay.run.outcome;
     assert_eq!(replay.commands, base.commands, "commanded motion");
     assert_eq!(r.reason, live.reason);

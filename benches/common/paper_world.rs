@@ -6,14 +6,17 @@ use sim_laser::World;
 
 /// Poses (x, y, heading rad) in free space of the paper's world, each at least 0.45 m from any
 /// obstacle: the paper's start, its point B, and points spread over the world.
-pub const POSES: [(f64, f64, f64); 6] = [
-    (-3.92, -4.26, 0.785),
-    (-2.09, -2.34, 0.9),
-    (-1.0, 2.0, 0.3),
-    (3.5, -1.0, 1.2),
-    (2.0, 3.0, 0.6),
-    (4.0, 4.0, -2.4),
-];
+pub fn poses() -> [(f64, f64, f64); 6] {
+    let start = sim_laser::paper_start();
+    [
+        (start.x_m, start.y_m, start.theta_rad),
+        (-2.09, -2.34, 0.9),
+        (-1.0, 2.0, 0.3),
+        (3.5, -1.0, 1.2),
+        (2.0, 3.0, 0.6),
+        (4.0, 4.0, -2.4),
+    ]
+}
 
 /// The scan a noise-free sensor of geometry `g` takes at (x, y) facing `heading_rad`.
 pub fn scan(world: &World, g: &ScanGeometry, x: f64, y: f64, heading_rad: f64) -> Scan {

@@ -87,23 +87,18 @@ fn scan_writes_csv_and_json() {
 
 #[test]
 fn scan_sim_and_emulate_sim_agree() {
-    // The simulator seen directly and through the emulated URG-04LX on a pty.
-    let pose = "-3.92,-4.26,45";
-    let mut direct = robot_app::simsetup::sim_scan_source(
-        None,
-        robot_app::simsetup::parse_pose(pose).unwrap(),
-        "urg-04lx",
-        0,
-        false,
-    )
-    .unwrap();
+    // The simulator seen directly and through the emulated URG-04LX on a pty, both at the
+    // paper's start (the emulator's default pose).
+    let mut direct =
+        robot_app::simsetup::sim_scan_source(None, sim_laser::paper_start(), "urg-04lx", 0, false)
+            .unwrap();
     let want = direct.next_scan().unwrap();
     let server = emulate::start(&EmulateArgs {
         model: Model::Urg04lx,
         scip1: true,
         sim: true,
         world: None,
-        pose: Some(pose.into()),
+        pose: None,
         seed: 0,
         noise: "off".into(),
         no_stdin: true,
@@ -142,7 +137,7 @@ fn scan_sim_and_emulate_sim_agree() {
     let mut args = scan_args(None, ScanFormat::Csv, 1);
     args.sim = true;
     args.sensor = "urg-04lx".into();
-    args.pose = Some(pose.into());
+    args.pose = None; // the paper's start
     let mut out = Vec::new();
     scan::run_to(&args, &mut out).unwrap();
     let (_, sim) = robot_app::scan_csv::read_scan_csv(&out[..], "sim output").unwrap();

@@ -24,4 +24,34 @@ pub enum ScanTypesError {
         /// The geometry's ray count.
         expected: usize,
     },
+    /// A comma-separated value has a part that is not a finite number.
+    #[error("{what} {text:?}: {token:?} is not a finite number")]
+    NotANumber {
+        /// What the text should describe (`pose`, `point`, `size`).
+        what: &'static str,
+        /// The whole text.
+        text: String,
+        /// The part that is not a number.
+        token: String,
+    },
+    /// A comma-separated value has the wrong number of parts.
+    #[error("{what} {text:?}: expected {expected} comma-separated numbers, found {found}")]
+    WrongCount {
+        /// What the text should describe.
+        what: &'static str,
+        /// The whole text.
+        text: String,
+        /// Numbers expected.
+        expected: usize,
+        /// Numbers found.
+        found: usize,
+    },
+    /// A value that must be positive is not.
+    #[error("{what} {text:?}: every number must be > 0")]
+    NotPositive {
+        /// What the text should describe.
+        what: &'static str,
+        /// The whole text.
+        text: String,
+    },
 }

@@ -23,6 +23,8 @@ mod description;
 mod error;
 mod generate;
 mod mapserver;
+mod sampling;
+mod scenario;
 mod sensor;
 mod sim;
 mod stage;
@@ -32,6 +34,11 @@ pub use description::{WorldDescription, read_description};
 pub use error::SimError;
 pub use generate::{GenParams, generate_world};
 pub use mapserver::{MapMode, MapServerYaml, parse_map_yaml};
+pub use sampling::{
+    FreeSpace, PAIR_CELL_M, PairSampler, WorldKind, corridor_world_params, generated_world,
+    pair_salt, random_world_params,
+};
+pub use scenario::{SimSetup, file_scenario, paper_start, paper_target};
 pub use sensor::{
     DROPOUT_CODE, LaserNoise, SensorPreset, SigmaCombine, TOO_NEAR_CODE, cast_scan, true_scan,
 };

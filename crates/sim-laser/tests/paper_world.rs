@@ -23,7 +23,7 @@ fn max_range_jumps(pose: &Pose2, g: &ScanGeometry, world: &World) -> Vec<WorldPo
 #[test]
 fn paper_start_sees_six_jumps_nearest_at_papers_point() {
     let world = World::paper();
-    let pose = Pose2::new(-3.92, -4.26, 45f64.to_radians());
+    let pose = sim_laser::paper_start();
     let g = SensorPreset::Paper.geometry();
     let jumps = max_range_jumps(&pose, &g, &world);
     assert_eq!(jumps.len(), 6, "jumps: {jumps:?}");

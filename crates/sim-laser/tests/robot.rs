@@ -125,7 +125,7 @@ fn same_seed_same_run_different_seed_different_run() {
         let (mut l, mut b, t) = Simulation::with_preset(
             Arc::new(World::paper()),
             SensorPreset::Paper,
-            Pose2::new(-3.92, -4.26, 45f64.to_radians()),
+            sim_laser::paper_start(),
             seed,
         )
         .split();

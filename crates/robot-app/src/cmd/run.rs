@@ -6,7 +6,7 @@ use anyhow::{Context, bail};
 use clap::Args;
 use scan_types::{LaserSource, Pose2, Scan};
 
-use super::sim::{parse_pose_deg, parse_xy, thread_cpu_time_s};
+use super::sim::thread_cpu_time_s;
 use crate::base::open_base;
 use crate::outputs::{Reason, Summary};
 use crate::runloop::run_loop;
@@ -34,9 +34,9 @@ pub struct RunArgs {
 /// Runs `robot-app run`.
 pub fn run(args: RunArgs) -> anyhow::Result<()> {
     let config = args.options.prepare()?;
-    let goal = parse_xy(&args.goal, "--goal")?;
+    let goal = scan_types::parse_point(&args.goal).context("--goal")?;
     let start = match &args.start {
-        Some(s) => parse_pose_deg(s, "--start")?,
+        Some(s) => scan_types::parse_pose_deg(s).context("--start")?,
         None => Pose2::new(0.0, 0.0, 0.0),
     };
     let mut base = open_base(&args.base)?;

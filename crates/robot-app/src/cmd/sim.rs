@@ -1,21 +1,16 @@
 //! `robot-app sim`: goal seeking in the simulator. With no arguments: the paper's scenario.
 
 use std::path::{Path, PathBuf};
-use std::sync::Arc;
 
 use anyhow::{Context, bail};
 use clap::Args;
 use scan_types::{Pose2, WorldPoint};
-use sim_laser::{LaserNoise, MotionNoise, SensorPreset, Simulation, World};
+use sim_laser::{SensorPreset, SimSetup, paper_start, paper_target};
 
 use crate::config::Params;
 use crate::outputs::{Reason, Summary, write_summary, write_trajectory};
 use crate::runloop::run_loop;
 
-/// The paper's start: (-3.92, -4.26), heading 45 deg.
-pub const PAPER_START: (f64, f64, f64) = (-3.92, -4.26, 45.0);
-/// The paper's target.
-pub const PAPER_GOAL: (f64, f64) = (4.0, 4.0);
 /// A simulated run counts as a success when the true position ends this close to the target.
 pub const SUCCESS_RADIUS_M: f64 = 0.3;
 
@@ -46,40 +41,32 @@ pub struct SimArgs {
     pub options: super::LoopOptions,
 }
 
-/// Everything that defines one simulated run.
+/// Everything that defines one simulated run: the simulation, the target and the tuning.
 #[derive(Debug, Clone)]
 pub struct SimSpec {
-    /// The world.
-    pub world: Arc<World>,
-    /// A name for the world in reports.
-    pub world_name: String,
-    /// Start pose (true and initial estimate).
-    pub start: Pose2,
+    /// World, sensor, seed, noise, robot radius (the configuration's) and start pose (true and
+    /// initial estimate).
+    pub setup: SimSetup,
     /// Target.
     pub goal: WorldPoint,
-    /// Sensor preset.
-    pub sensor: SensorPreset,
-    /// Noise seed.
-    pub seed: u64,
-    /// Noise on.
-    pub noise: bool,
     /// Tuning.
     pub config: Params,
 }
 
 impl SimSpec {
-    /// The paper's scenario with a seed and a configuration.
-    pub fn paper(seed: u64, config: Params) -> Self {
+    /// A run of `setup` to `goal` tuned by `config`, the robot radius taken from `config`.
+    pub fn new(mut setup: SimSetup, goal: WorldPoint, config: Params) -> Self {
+        setup.robot_radius_m = config.robot.radius_m;
         Self {
-            world: Arc::new(World::paper()),
-            world_name: "paper".into(),
-            start: Pose2::new(PAPER_START.0, PAPER_START.1, PAPER_START.2.to_radians()),
-            goal: WorldPoint::new(PAPER_GOAL.0, PAPER_GOAL.1),
-            sensor: SensorPreset::Paper,
-            seed,
-            noise: true,
+            setup,
+            goal,
             config,
         }
+    }
+
+    /// The paper's scenario with a seed and a configuration.
+    pub fn paper(seed: u64, config: Params) -> Self {
+        Self::new(SimSetup::paper(seed), paper_target(), config)
     }
 }
 
@@ -127,20 +114,7 @@ pub fn simulate_observed(
     mut observer: Option<ScanObserver>,
 ) -> anyhow::Result<SimRun> {
     let cpu0 = thread_cpu_time_s();
-    let (laser_noise, motion_noise) = if spec.noise {
-        (spec.sensor.default_noise(), MotionNoise::default())
-    } else {
-        (LaserNoise::off(), MotionNoise::off())
-    };
-    let sim = Simulation::new(
-        spec.world.clone(),
-        spec.sensor,
-        laser_noise,
-        motion_noise,
-        spec.config.robot.radius_m,
-        spec.start,
-        spec.seed,
-    );
+    let sim = spec.setup.build()?;
     let (mut laser, mut base, truth) = sim.split();
     let observed = observer.is_some();
     let mut pose_hook = |s: &scan_types::Scan, e: &Pose2| {
@@ -154,7 +128,7 @@ pub fn simulate_observed(
         &mut laser,
         &mut base,
         &spec.config,
-        (spec.start, spec.goal),
+        (spec.setup.start, spec.goal),
         Some(&truth),
         hook,
     )?;
@@ -192,8 +166,8 @@ pub fn simulate_observed(
         goal_distance_m: Some(goal_distance),
         cpu_time_s: cpu,
         method: spec.config.method.to_string(),
-        seed: Some(spec.seed),
-        start: pose_deg(&spec.start),
+        seed: Some(spec.setup.seed),
+        start: pose_deg(&spec.setup.start),
         goal: [spec.goal.x_m(), spec.goal.y_m()],
         final_estimate: pose_deg(&outcome.estimate),
         final_truth: Some(pose_deg(&t)),
@@ -222,86 +196,37 @@ pub fn write_outputs(dir: &Path, run: &SimRun, title: &str) -> anyhow::Result<()
     crate::plot::write_plots(dir, &run.log, title)
 }
 
-/// Parses `X,Y`.
-pub fn parse_xy(s: &str, what: &str) -> anyhow::Result<WorldPoint> {
-    let v = parse_floats(s, what)?;
-    if v.len() != 2 {
-        bail!("{what} '{s}': expected X,Y");
-    }
-    Ok(WorldPoint::new(v[0], v[1]))
-}
-
-/// Parses `X,Y,THETA_DEG`.
-pub fn parse_pose_deg(s: &str, what: &str) -> anyhow::Result<Pose2> {
-    let v = parse_floats(s, what)?;
-    if v.len() != 3 {
-        bail!("{what} '{s}': expected X,Y,THETA_DEG");
-    }
-    Ok(Pose2::new(v[0], v[1], v[2].to_radians()))
-}
-
-fn parse_floats(s: &str, what: &str) -> anyhow::Result<Vec<f64>> {
-    s.split(',')
-        .map(|p| {
-            let x: f64 = p
-                .trim()
-                .parse()
-                .with_context(|| format!("{what} '{s}': '{p}' is not a number"))?;
-            if !x.is_finite() {
-                bail!("{what} '{s}': '{p}' is not finite");
-            }
-            Ok(x)
-        })
-        .collect()
-}
-
-/// Loads a world by path, or the paper's world.
-pub fn load_world(path: Option<&Path>) -> anyhow::Result<(Arc<World>, String)> {
-    match path {
-        None => Ok((Arc::new(World::paper()), "paper".into())),
-        Some(p) => {
-            let w = World::load(p).with_context(|| format!("cannot load world {}", p.display()))?;
-            let name = p
-                .file_stem()
-                .map_or_else(|| "world".into(), |s| s.to_string_lossy().into_owned());
-            Ok((Arc::new(w), name))
-        }
-    }
-}
-
 /// Runs `robot-app sim`.
 pub fn run(args: SimArgs) -> anyhow::Result<()> {
     let config = args.options.prepare()?;
-    let (world, world_name) = load_world(args.world.as_deref())?;
-    let sensor: SensorPreset = args
+    let mut setup = match &args.world {
+        None => SimSetup::load(None)?,
+        Some(p) => {
+            SimSetup::load(Some(p)).with_context(|| format!("cannot load world {}", p.display()))?
+        }
+    };
+    setup.sensor = args
         .sensor
-        .parse()
+        .parse::<SensorPreset>()
         .map_err(|e| anyhow::anyhow!("--sensor {}: {e}", args.sensor))?;
-    let start = match &args.start {
-        Some(s) => parse_pose_deg(s, "--start")?,
-        None => Pose2::new(PAPER_START.0, PAPER_START.1, PAPER_START.2.to_radians()),
+    setup.start = match &args.start {
+        Some(s) => scan_types::parse_pose_deg(s).context("--start")?,
+        None => paper_start(),
     };
     let goal = match &args.goal {
-        Some(s) => parse_xy(s, "--goal")?,
-        None => WorldPoint::new(PAPER_GOAL.0, PAPER_GOAL.1),
+        Some(s) => scan_types::parse_point(s).context("--goal")?,
+        None => paper_target(),
     };
-    let spec = SimSpec {
-        world,
-        world_name,
-        start,
-        goal,
-        sensor,
-        seed: args.seed,
-        noise: args.noise != "off",
-        config,
-    };
+    setup.seed = args.seed;
+    setup.noise = args.noise != "off";
+    let spec = SimSpec::new(setup, goal, config);
     let run = match &args.options.record {
         None => simulate(&spec, None)?,
         Some(path) => record_run(&spec, path)?,
     };
     let title = format!(
         "method {} — {} world, seed {}: {}",
-        spec.config.method, spec.world_name, spec.seed, run.summary.reason
+        spec.config.method, spec.setup.world_name, spec.setup.seed, run.summary.reason
     );
     write_outputs(&args.options.out, &run, &title)?;
     let s = &run.summary;
@@ -340,17 +265,18 @@ pub fn run(args: SimArgs) -> anyhow::Result<()> {
 /// `path` (MCAP), with the run's settings ([`crate::record::RUN_METADATA`]) and the legs it
 /// drove ([`crate::record::LEGS_METADATA`]), so `robot-app replay FILE --loop` can repeat it.
 pub fn record_run(spec: &SimSpec, path: &Path) -> anyhow::Result<SimRun> {
-    let geometry = spec.sensor.geometry();
+    let setup = &spec.setup;
+    let geometry = setup.sensor.geometry();
     let mut recorder = crate::record::Recorder::create(path, &geometry)
         .with_context(|| format!("cannot record to {}", path.display()))?;
     let settings = crate::record::RunSettings {
-        start: spec.start,
+        start: setup.start,
         goal: spec.goal,
         config: spec.config.clone(),
-        world: spec.world_name.clone(),
-        sensor: spec.sensor.name().to_string(),
-        seed: spec.seed,
-        noise: spec.noise,
+        world: setup.world_name.clone(),
+        sensor: setup.sensor.name().to_string(),
+        seed: setup.seed,
+        noise: setup.noise,
     };
     recorder.write_metadata(crate::record::RUN_METADATA, &settings.to_metadata())?;
     let mut err: Option<anyhow::Error> = None;

@@ -135,7 +135,7 @@ fn info(a: InfoArgs) -> anyhow::Result<()> {
         Some(p) => World::load(p).with_context(|| format!("loading world {}", p.display()))?,
     };
     let (lo, hi) = world.bounds();
-    let (start, target) = crate::simsetup::scenario(a.path.as_deref().map(Path::new))?;
+    let (start, target) = sim_laser::file_scenario(a.path.as_deref().map(Path::new))?;
     let mut out = std::io::stdout().lock();
     writeln!(out, "world: {}", world.name())?;
     writeln!(

@@ -1,0 +1,175 @@
+//! The runs of a batch: the worlds it names or generates, each world's own scenario once per
+//! seed and its seeded random start/target pairs, for every method.
+
+use std::path::Path;
+use std::sync::Arc;
+
+use anyhow::Context;
+use scan_types::{Pose2, WorldPoint};
+use sim_laser::{PairSampler, SensorPreset, SimSetup, WorldKind, generated_world};
+
+use super::{BatchArgs, parse_seeds};
+use crate::cmd::sim::SimSpec;
+use crate::config::{Method, Params};
+
+/// One simulated run of a batch and where it is reported.
+pub struct Job {
+    /// Group the run is reported in.
+    pub group: String,
+    /// World kind.
+    pub kind: WorldKind,
+    /// Pair index within its world (random pairs only).
+    pub pair: Option<usize>,
+    /// The run.
+    pub spec: SimSpec,
+}
+
+/// A world of the batch.
+struct WorldEntry {
+    /// World, name and sensor; start and seed are set per job.
+    setup: SimSetup,
+    kind: WorldKind,
+    /// Index of a generated world (its generator seed; 0 for the paper world and files).
+    index: u64,
+    /// The world's own scenario (paper's start/target, or the generator's).
+    scenario: Option<(Pose2, WorldPoint)>,
+}
+
+/// What every world's jobs share.
+struct Plan {
+    seeds: std::ops::Range<u64>,
+    configs: Vec<Params>,
+    own_scenario: bool,
+    pairs: bool,
+    n_pairs: usize,
+    min_distance_m: f64,
+    /// Clearance of random pair ends: the first method's robot radius plus 0.1 m.
+    room_m: f64,
+}
+
+/// Every job of `robot-app batch` with `args`, in run order.
+pub fn build(args: &BatchArgs) -> anyhow::Result<Vec<Job>> {
+    let seeds = parse_seeds(&args.seeds)?;
+    let sensor: SensorPreset = args
+        .sensor
+        .parse()
+        .map_err(|e| anyhow::anyhow!("--sensor {}: {e}", args.sensor))?;
+    let methods = if args.method.is_empty() {
+        vec![Method::Goalseek]
+    } else {
+        args.method.clone()
+    };
+    let configs: Vec<Params> = methods
+        .iter()
+        .map(|m| crate::config::load(args.config.as_deref(), Some(*m)))
+        .collect::<anyhow::Result<_>>()?;
+    let plan = Plan {
+        own_scenario: args.scenarios != "pairs",
+        pairs: args.scenarios != "paper",
+        n_pairs: args
+            .random_pairs
+            .unwrap_or((seeds.end - seeds.start) as usize),
+        min_distance_m: args.min_distance,
+        room_m: configs[0].robot.radius_m + 0.1,
+        seeds,
+        configs,
+    };
+    let mut jobs = Vec::new();
+    for mut w in worlds(args)? {
+        w.setup.sensor = sensor;
+        world_jobs(&w, &plan, &mut jobs);
+    }
+    Ok(jobs)
+}
+
+/// The worlds named by `--worlds` (default: the paper's), then the generated ones.
+fn worlds(args: &BatchArgs) -> anyhow::Result<Vec<WorldEntry>> {
+    let mut worlds: Vec<WorldEntry> = Vec::new();
+    let names = if args.worlds.is_empty() && args.random_worlds == 0 && args.corridor_worlds == 0 {
+        vec!["paper".to_string()]
+    } else {
+        args.worlds.clone()
+    };
+    for w in &names {
+        if w == "paper" {
+            worlds.push(WorldEntry {
+                setup: SimSetup::load(None)?,
+                kind: WorldKind::Paper,
+                index: 0,
+                scenario: Some((sim_laser::paper_start(), sim_laser::paper_target())),
+            });
+        } else {
+            let p = Path::new(w);
+            worlds.push(WorldEntry {
+                setup: SimSetup::load(Some(p))
+                    .with_context(|| format!("cannot load world {}", p.display()))?,
+                kind: WorldKind::File,
+                index: 0,
+                scenario: None,
+            });
+        }
+    }
+    for (kind, count) in [
+        (WorldKind::Random, args.random_worlds),
+        (WorldKind::Corridor, args.corridor_worlds),
+    ] {
+        for k in 0..count as u64 {
+            let (world, start, target) =
+                generated_world(kind, k).with_context(|| format!("generating {kind} world {k}"))?;
+            worlds.push(WorldEntry {
+                setup: SimSetup::new(Arc::new(world), format!("{kind}-{k}")),
+                kind,
+                index: k,
+                scenario: Some((start, target)),
+            });
+        }
+    }
+    Ok(worlds)
+}
+
+/// Appends the jobs of world `w`: its own scenario per seed, then its random pairs.
+fn world_jobs(w: &WorldEntry, plan: &Plan, jobs: &mut Vec<Job>) {
+    let prefix = match w.kind {
+        WorldKind::File => w.setup.world_name.clone(),
+        k => k.to_string(),
+    };
+    let spec = |start: Pose2, goal: WorldPoint, seed: u64, cfg: &Params| {
+        let setup = SimSetup {
+            start,
+            seed,
+            ..w.setup.clone()
+        };
+        SimSpec::new(setup, goal, cfg.clone())
+    };
+    if let (true, Some((start, goal))) = (plan.own_scenario, w.scenario) {
+        for seed in plan.seeds.clone() {
+            for cfg in &plan.configs {
+                jobs.push(Job {
+                    group: format!("{prefix}-scenario"),
+                    kind: w.kind,
+                    pair: None,
+                    spec: spec(start, goal, seed, cfg),
+                });
+            }
+        }
+    }
+    if !plan.pairs || plan.n_pairs == 0 {
+        return;
+    }
+    let sampler = PairSampler::new(&w.setup.world, w.kind, w.index, plan.room_m);
+    for i in 0..plan.n_pairs {
+        let seed = plan.seeds.start + i as u64;
+        let Some((start, goal)) = sampler.pair(seed, plan.min_distance_m) else {
+            tracing::warn!(world = %w.setup.world_name, seed, "no start/target pair far enough apart");
+            continue;
+        };
+        for cfg in &plan.configs {
+            jobs.push(Job {
+                group: format!("{prefix}-pairs"),
+                kind: w.kind,
+                pair: Some(i),
+                spec: spec(start, goal, seed, cfg),
+            });
+        }
+    }
+}

@@ -1,0 +1,194 @@
+//! `robot-app batch`: many simulated runs in parallel, a summary table and `batch.json`.
+//!
+//! [`jobs`] turns the arguments into simulated runs, [`table`] turns their summaries into rows,
+//! aggregates and the table.
+
+pub mod jobs;
+pub mod table;
+
+use std::path::PathBuf;
+
+use anyhow::{Context, bail};
+use clap::Args;
+use indicatif::{ProgressBar, ProgressStyle};
+use rayon::prelude::*;
+use serde::Serialize;
+
+use self::jobs::Job;
+use self::table::{Aggregate, BatchRow, aggregate, table};
+use super::sim::{SimRun, simulate};
+use crate::config::Method;
+use crate::outputs::write_atomic;
+
+/// Arguments of `robot-app batch`.
+#[derive(Debug, Args)]
+pub struct BatchArgs {
+    /// Worlds to run in: `paper` or world files (default: paper).
+    #[arg(long, num_args = 1.., value_name = "W")]
+    pub worlds: Vec<String>,
+    /// Seeds A..B (B excluded): each seed gives one run per scenario and world.
+    #[arg(long, default_value = "0..50", value_name = "A..B")]
+    pub seeds: String,
+    /// Also run in K seeded random worlds: rooms on both sides of a 1.6 m corridor, doors,
+    /// clutter (sim-laser's generator, seeds 0..K).
+    #[arg(long, default_value_t = 0, value_name = "K")]
+    pub random_worlds: usize,
+    /// Also run in K seeded wide-corridor worlds (a 4 m wide, 24 m long empty corridor between
+    /// rooms; pairs lie in the corridor), reported apart as `corridor`.
+    #[arg(long, default_value_t = 0, value_name = "K")]
+    pub corridor_worlds: usize,
+    /// Random start/target pairs per world (default: one per seed). Pair i uses noise seed
+    /// A+i, so pairs are the same for every method.
+    #[arg(long, value_name = "N")]
+    pub random_pairs: Option<usize>,
+    /// Scenarios: `paper` (the paper's start and target in the paper world, or a generated
+    /// world's own start and target, once per seed), `pairs` (random start/target pairs at least
+    /// --min-distance apart in free space), or both.
+    #[arg(long, default_value = "both", value_parser = ["paper", "pairs", "both"])]
+    pub scenarios: String,
+    /// Smallest start-target distance of a random pair, metres.
+    #[arg(long, default_value_t = 6.0)]
+    pub min_distance: f64,
+    /// Methods to run, comma-separated (e.g. goalseek,paper for a side-by-side table).
+    #[arg(long, default_value = "goalseek", value_delimiter = ',')]
+    pub method: Vec<Method>,
+    /// TOML file overriding tuning parameters (applied to every method's preset).
+    #[arg(long, value_name = "FILE")]
+    pub config: Option<PathBuf>,
+    /// Sensor preset.
+    #[arg(long, default_value = "paper")]
+    pub sensor: String,
+    /// Output folder for batch.json.
+    #[arg(long, default_value = "goalseek-batch")]
+    pub out: PathBuf,
+    /// Also write each run's outputs under OUT/runs/.
+    #[arg(long)]
+    pub keep_runs: bool,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    pub jobs: Option<usize>,
+}
+
+/// Parses `A..B` (B excluded) or a single seed.
+pub fn parse_seeds(s: &str) -> anyhow::Result<std::ops::Range<u64>> {
+    let bad = || format!("--seeds '{s}': expected A..B (B excluded) or N");
+    if let Some((a, b)) = s.split_once("..") {
+        let a: u64 = a.trim().parse().with_context(bad)?;
+        let b: u64 = b.trim().parse().with_context(bad)?;
+        if b <= a {
+            bail!("--seeds '{s}': the range is empty");
+        }
+        Ok(a..b)
+    } else {
+        let a: u64 = s.trim().parse().with_context(bad)?;
+        Ok(a..a + 1)
+    }
+}
+
+#[derive(Serialize)]
+struct BatchFile<'a> {
+    command: String,
+    aggregates: &'a [Aggregate],
+    rows: &'a [BatchRow],
+}
+
+/// Runs `robot-app batch`.
+pub fn run(args: BatchArgs) -> anyhow::Result<()> {
+    let jobs = jobs::build(&args)?;
+    if jobs.is_empty() {
+        bail!("nothing to run: no worlds, seeds or scenarios");
+    }
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("cannot create {}", args.out.display()))?;
+    let rows = run_jobs(&jobs, &args)?;
+    let aggs = aggregate(&rows);
+    let file = BatchFile {
+        command: std::env::args().collect::<Vec<_>>().join(" "),
+        aggregates: &aggs,
+        rows: &rows,
+    };
+    let mut text = serde_json::to_string_pretty(&file)?;
+    text.push('\n');
+    write_atomic(&args.out.join("batch.json"), text.as_bytes())?;
+    #[allow(clippy::print_stdout)]
+    {
+        print!("{}", table(&aggs));
+        println!("batch.json: {}", args.out.join("batch.json").display());
+    }
+    Ok(())
+}
+
+/// Runs every job on `--jobs` worker threads with a progress bar, rows in job order.
+fn run_jobs(jobs: &[Job], args: &BatchArgs) -> anyhow::Result<Vec<BatchRow>> {
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(args.jobs.unwrap_or(0))
+        .build()
+        .context("cannot start the worker threads")?;
+    let bar = ProgressBar::new(jobs.len() as u64);
+    bar.set_style(
+        ProgressStyle::with_template("{bar:40} {pos}/{len} runs, {elapsed} elapsed, eta {eta}")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    let keep = args.keep_runs.then(|| args.out.join("runs"));
+    let rows: Vec<anyhow::Result<BatchRow>> = pool.install(|| {
+        jobs.par_iter()
+            .map(|job| {
+                let run = simulate(&job.spec, None)?;
+                if let Some(dir) = &keep {
+                    let sub = dir.join(format!(
+                        "{}-{}-{}-{}",
+                        job.group,
+                        job.spec.setup.world_name,
+                        job.spec.config.method,
+                        job.spec.setup.seed
+                    ));
+                    super::sim::write_outputs(&sub, &run, &sub.display().to_string())?;
+                }
+                bar.inc(1);
+                Ok(row_of(job, run))
+            })
+            .collect()
+    });
+    bar.finish_and_clear();
+    rows.into_iter().collect()
+}
+
+/// The batch.json row of a finished job.
+fn row_of(job: &Job, run: SimRun) -> BatchRow {
+    let s = run.summary;
+    BatchRow {
+        group: job.group.clone(),
+        kind: job.kind,
+        world: job.spec.setup.world_name.clone(),
+        pair: job.pair,
+        method: s.method,
+        seed: job.spec.setup.seed,
+        start: s.start,
+        goal: s.goal,
+        reached: s.reached,
+        reason: s.reason,
+        legs: s.legs,
+        scans: s.scans,
+        collisions: s.collisions,
+        final_position_error_m: s.final_position_error_m,
+        final_heading_error_deg: s.final_heading_error_deg,
+        ate_rmse_m: s.ate_rmse_m,
+        goal_distance_m: s.goal_distance_m,
+        path_length_m: s.path_length_m,
+        cpu_time_s: s.cpu_time_s,
+        note: s.note,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn seeds_parse() {
+        assert_eq!(parse_seeds("0..50").unwrap(), 0..50);
+        assert_eq!(parse_seeds("7").unwrap(), 7..8);
+        assert!(parse_seeds("5..5").is_err());
+        assert!(parse_seeds("a..b").is_err());
+    }
+}

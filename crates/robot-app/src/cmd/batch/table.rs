@@ -1,0 +1,262 @@
+//! Rows of `batch.json`, their aggregates per group and method, and the summary table.
+
+use serde::Serialize;
+use sim_laser::WorldKind;
+
+use crate::outputs::Reason;
+
+/// One row of batch.json.
+#[derive(Debug, Clone, Serialize)]
+pub struct BatchRow {
+    /// Group the run is reported in.
+    pub group: String,
+    /// World kind: `paper`, `random`, `corridor` or `file`.
+    pub kind: WorldKind,
+    /// World name.
+    pub world: String,
+    /// Pair index within its world (random pairs only).
+    pub pair: Option<usize>,
+    /// Method.
+    pub method: String,
+    /// Seed.
+    pub seed: u64,
+    /// Start `[x, y, theta_deg]`.
+    pub start: [f64; 3],
+    /// Target `[x, y]`.
+    pub goal: [f64; 2],
+    /// Success: true position within 0.3 m of the target, no collision.
+    pub reached: bool,
+    /// Why the run ended.
+    pub reason: Reason,
+    /// Legs.
+    pub legs: usize,
+    /// Scans.
+    pub scans: usize,
+    /// Collisions.
+    pub collisions: usize,
+    /// Final localisation error, metres.
+    pub final_position_error_m: Option<f64>,
+    /// Final heading error, degrees.
+    pub final_heading_error_deg: Option<f64>,
+    /// ATE RMSE over the legs, metres.
+    pub ate_rmse_m: Option<f64>,
+    /// True distance to the target at the end, metres.
+    pub goal_distance_m: Option<f64>,
+    /// Distance driven, metres.
+    pub path_length_m: f64,
+    /// CPU time, seconds.
+    pub cpu_time_s: f64,
+    /// How it ended.
+    pub note: String,
+}
+
+/// Aggregates of one group and method.
+#[derive(Debug, Clone, Serialize)]
+pub struct Aggregate {
+    /// Group.
+    pub group: String,
+    /// World kind of the group's runs.
+    pub kind: WorldKind,
+    /// Method.
+    pub method: String,
+    /// Runs.
+    pub runs: usize,
+    /// Successful runs.
+    pub reached: usize,
+    /// Success rate, percent.
+    pub success_pct: f64,
+    /// Runs with a collision.
+    pub runs_with_collision: usize,
+    /// Median final localisation error, metres.
+    pub median_final_error_m: f64,
+    /// 90th percentile of the final localisation error, metres.
+    pub p90_final_error_m: f64,
+    /// Median ATE RMSE, metres.
+    pub median_ate_rmse_m: f64,
+    /// Median legs.
+    pub median_legs: f64,
+    /// Median CPU time per run, seconds.
+    pub median_cpu_time_s: f64,
+    /// Count of runs per end reason (`false_arrival`: the estimate reached the target, the
+    /// robot did not).
+    pub reasons: std::collections::BTreeMap<String, usize>,
+}
+
+fn median(v: &mut [f64]) -> f64 {
+    percentile(v, 0.5)
+}
+
+fn percentile(v: &mut [f64], q: f64) -> f64 {
+    if v.is_empty() {
+        return f64::NAN;
+    }
+    v.sort_by(f64::total_cmp);
+    let pos = q * (v.len() - 1) as f64;
+    let (i, f) = (pos.floor() as usize, pos.fract());
+    if i + 1 < v.len() {
+        v[i] * (1.0 - f) + v[i + 1] * f
+    } else {
+        v[i]
+    }
+}
+
+/// Aggregates rows per group and method, in first-seen order.
+pub fn aggregate(rows: &[BatchRow]) -> Vec<Aggregate> {
+    let mut keys: Vec<(String, String, WorldKind)> = Vec::new();
+    for r in rows {
+        let k = (r.group.clone(), r.method.clone(), r.kind);
+        if !keys.iter().any(|(g, m, _)| *g == k.0 && *m == k.1) {
+            keys.push(k);
+        }
+    }
+    keys.into_iter()
+        .map(|(group, method, kind)| {
+            let sel: Vec<&BatchRow> = rows
+                .iter()
+                .filter(|r| r.group == group && r.method == method)
+                .collect();
+            let runs = sel.len();
+            let reached = sel.iter().filter(|r| r.reached).count();
+            let mut fe: Vec<f64> = sel
+                .iter()
+                .filter_map(|r| r.final_position_error_m)
+                .collect();
+            let mut ate: Vec<f64> = sel.iter().filter_map(|r| r.ate_rmse_m).collect();
+            let mut legs: Vec<f64> = sel.iter().map(|r| r.legs as f64).collect();
+            let mut cpu: Vec<f64> = sel.iter().map(|r| r.cpu_time_s).collect();
+            let mut reasons = std::collections::BTreeMap::new();
+            for r in &sel {
+                // The estimate said "reached" but the robot is not at the target.
+                let key = if r.reason == Reason::Reached && !r.reached {
+                    "false_arrival".to_string()
+                } else {
+                    r.reason.to_string()
+                };
+                *reasons.entry(key).or_insert(0) += 1;
+            }
+            Aggregate {
+                runs,
+                reached,
+                success_pct: if runs == 0 {
+                    0.0
+                } else {
+                    100.0 * reached as f64 / runs as f64
+                },
+                runs_with_collision: sel.iter().filter(|r| r.collisions > 0).count(),
+                median_final_error_m: median(&mut fe),
+                p90_final_error_m: percentile(&mut fe, 0.9),
+                median_ate_rmse_m: median(&mut ate),
+                median_legs: median(&mut legs),
+                median_cpu_time_s: median(&mut cpu),
+                reasons,
+                group,
+                kind,
+                method,
+            }
+        })
+        .collect()
+}
+
+/// The summary table printed on stdout.
+pub fn table(aggs: &[Aggregate]) -> String {
+    use std::fmt::Write as _;
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "{:<20} {:<8} {:<9} {:>5} {:>8} {:>6} {:>10} {:>9} {:>9} {:>6} {:>8}  reasons",
+        "group",
+        "kind",
+        "method",
+        "runs",
+        "success",
+        "coll.",
+        "med.err m",
+        "p90 err",
+        "med.ATE",
+        "legs",
+        "cpu s"
+    );
+    for a in aggs {
+        let reasons: Vec<String> = a.reasons.iter().map(|(k, v)| format!("{k}:{v}")).collect();
+        let _ = writeln!(
+            s,
+            "{:<20} {:<8} {:<9} {:>5} {:>7.1}% {:>6} {:>10.3} {:>9.3} {:>9.3} {:>6.0} {:>8.3}  {}",
+            a.group,
+            a.kind,
+            a.method,
+            a.runs,
+            a.success_pct,
+            a.runs_with_collision,
+            a.median_final_error_m,
+            a.p90_final_error_m,
+            a.median_ate_rmse_m,
+            a.median_legs,
+            a.median_cpu_time_s,
+            reasons.join(" ")
+        );
+    }
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn percentiles_by_hand() {
+        let mut v = vec![4.0, 1.0, 3.0, 2.0];
+        assert_eq!(median(&mut v), 2.5);
+        let mut v = vec![0.0, 10.0];
+        assert!((percentile(&mut v, 0.9) - 9.0).abs() < 1e-12);
+        assert!(median(&mut []).is_nan());
+    }
+
+    fn row(group: &str, reached: bool, err: f64) -> BatchRow {
+        BatchRow {
+            group: group.into(),
+            kind: WorldKind::Paper,
+            world: "w".into(),
+            pair: None,
+            method: "goalseek".into(),
+            seed: 0,
+            start: [0.0; 3],
+            goal: [0.0; 2],
+            reached,
+            reason: if reached {
+                Reason::Reached
+            } else {
+                Reason::LegLimit
+            },
+            legs: 3,
+            scans: 10,
+            collisions: 0,
+            final_position_error_m: Some(err),
+            final_heading_error_deg: Some(0.0),
+            ate_rmse_m: Some(err),
+            goal_distance_m: Some(0.1),
+            path_length_m: 1.0,
+            cpu_time_s: 0.1,
+            note: String::new(),
+        }
+    }
+
+    #[test]
+    fn aggregates_per_group() {
+        let rows = vec![
+            row("a", true, 0.01),
+            row("a", false, 0.03),
+            row("b", true, 0.5),
+            row("a", true, 0.02),
+        ];
+        let a = aggregate(&rows);
+        assert_eq!(a.len(), 2);
+        assert_eq!((a[0].group.as_str(), a[0].runs, a[0].reached), ("a", 3, 2));
+        assert!((a[0].success_pct - 200.0 / 3.0).abs() < 1e-9);
+        assert!((a[0].median_final_error_m - 0.02).abs() < 1e-12);
+        assert_eq!(a[0].reasons["leg_limit"], 1);
+        let t = table(&a);
+        assert!(t.lines().count() == 3);
+        // The kind column is padded: "paper" then three spaces before the method.
+        assert!(t.contains("paper    goalseek"), "{t}");
+    }
+}
