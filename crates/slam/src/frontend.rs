@@ -277,13 +277,12 @@ impl FrontEnd {
             .grid
             .as_ref()
             .map_or(0.0, |g| crate::correlative::quality(g, &points, &pose));
-        let (pose, refined) = if refined
-            && refined_quality < found.quality - self.params.max_refine_loss
-        {
-            (found.pose, false)
-        } else {
-            (pose, refined)
-        };
+        let (pose, refined) =
+            if refined && refined_quality < found.quality - self.params.max_refine_loss {
+                (found.pose, false)
+            } else {
+                (pose, refined)
+            };
         let keyframe = self.is_keyframe(&pose);
         self.place(pose, geometry, scan, &points, keyframe);
         Placement::Placed {
