@@ -8,6 +8,7 @@
 //!   exposes the recorded pose of the last scan ([`LogSource::pose`]).
 //! - [`McapRecorder`]: writes scans and poses to an MCAP file that Foxglove opens as it is,
 //!   atomically (temp file + rename); [`read_mcap`] reads it back bit for bit.
+//! - [`write_scan_csv`], [`read_scan_csv`]: one scan as the CSV of `robot-app scan`.
 //!
 //! ```
 //! use scan_log::{LogOptions, LogSource};
@@ -26,6 +27,7 @@
 
 mod breezy;
 mod carmen;
+mod csv;
 mod error;
 mod mcap_io;
 mod record;
@@ -36,6 +38,7 @@ pub use breezy::{
     BREEZY_HEADER_FIELDS, BREEZY_RAY_COUNT, URG_DMIN_MM, breezy_geometry, classify_mm,
 };
 pub use carmen::{CARMEN_DEFAULT_MAX_RANGE_M, flaser_geometry};
+pub use csv::{read_scan_csv, write_scan_csv};
 pub use error::LogError;
 pub use mcap_io::{
     EST_POSE_TOPIC, McapRecorder, MetadataRecord, SCAN_TOPIC, STATUS_HIT, STATUS_MAX_RANGE,

@@ -136,7 +136,7 @@ fn print_scans<S: LaserSource, W: Write>(
                 if k > 0 {
                     writeln!(out)?;
                 }
-                crate::scan_csv::write_scan_csv(&mut *out, &geometry, &scan)?;
+                scan_log::write_scan_csv(&mut *out, &geometry, &scan)?;
             }
             ScanFormat::Json => {
                 serde_json::to_writer(&mut *out, &scan_json(k, &geometry, &scan))?;
