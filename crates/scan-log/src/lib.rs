@@ -8,6 +8,8 @@
 //!   exposes the recorded pose of the last scan ([`LogSource::pose`]).
 //! - [`McapRecorder`]: writes scans and poses to an MCAP file that Foxglove opens as it is,
 //!   atomically (temp file + rename); [`read_mcap`] reads it back bit for bit.
+//! - [`open_log`], [`LoopingLog`], [`RecordedLaser`]: a log played back as a laser, with a
+//!   geometry override, looping at its end, or with its recorded true poses.
 //! - [`write_scan_csv`], [`read_scan_csv`]: one scan as the CSV of `robot-app scan`.
 //!
 //! ```
@@ -30,6 +32,7 @@ mod carmen;
 mod csv;
 mod error;
 mod mcap_io;
+mod playback;
 mod record;
 mod source;
 mod text;
@@ -44,6 +47,7 @@ pub use mcap_io::{
     EST_POSE_TOPIC, McapRecorder, MetadataRecord, SCAN_TOPIC, STATUS_HIT, STATUS_MAX_RANGE,
     TRUE_POSE_TOPIC, parse_mcap, partial_path, read_mcap, read_mcap_metadata, recording_schemas,
 };
+pub use playback::{GeometryOverride, LoopingLog, RecordedLaser, RecordedTruth, open_log};
 pub use record::LogRecord;
 pub use source::{LogFormat, LogOptions, LogReader, LogSource, open_text};
 pub use text::{TextFormat, TextLog};
