@@ -8,5 +8,4 @@ pub mod outputs;
 pub mod plot;
 pub mod record;
 pub mod runloop;
-pub mod scan_csv;
 pub mod simsetup;

@@ -4,14 +4,12 @@
 //! The file is written as `FILE.partial` and renamed to `FILE` when the recording finishes
 //! (or when the [`Recorder`] is dropped); see `docs/logs.md`.
 
-use std::cell::Cell;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
-use std::rc::Rc;
 
 use anyhow::Context;
-use scan_log::{LogOptions, LogSource, McapRecorder};
-use scan_types::{LaserSource, MotionBase, Pose2, Scan, ScanGeometry, WorldPoint};
+use scan_log::{GeometryOverride, LogSource, McapRecorder, RecordedLaser, RecordedTruth};
+use scan_types::{MotionBase, Pose2, Scan, ScanGeometry, WorldPoint};
 
 use crate::config::Params;
 use crate::outputs::RunLog;
@@ -93,110 +91,24 @@ impl Drop for Recorder {
     }
 }
 
-/// The `--record FILE` sink of `robot-app scan`: records every scan printed.
-pub fn scan_sink(path: &Path) -> anyhow::Result<crate::cmd::scan::ScanSink<'static>> {
-    let mut rec: Option<Recorder> = None;
-    let path = path.to_path_buf();
-    Ok(Box::new(move |g: &ScanGeometry, s: &Scan| {
-        let r = match &mut rec {
-            Some(r) => r,
-            None => rec.insert(Recorder::create(&path, g)?),
-        };
-        r.record_scan(g, s, None, None)
-    }))
+/// Opens a log (CARMEN, BreezySLAM, goalseek MCAP), with an optional sensor preset name
+/// (`paper`, `urg-04lx`, `utm-30lx`) overriding its geometry (see [`scan_log::open_log`]).
+pub fn open_log(path: &Path, sensor: Option<&str>) -> anyhow::Result<LogSource> {
+    let preset = sensor.map(sensor_override).transpose()?;
+    scan_log::open_log(path, preset.as_ref())
+        .with_context(|| format!("opening the log {}", path.display()))
 }
 
-/// Opens a log (CARMEN, BreezySLAM, goalseek MCAP) as a `LaserSource`, with an optional
-/// sensor preset name (`paper`, `urg-04lx`, `utm-30lx`) overriding its geometry.
-///
-/// The preset gives the first bearing, the increment and the range limits; when the log's
-/// scans have another ray count (BreezySLAM's URG-04LX logs have 683 rays, the preset's
-/// steps 44..725 are 682), the log's count is kept and a warning says so.
-pub fn open_log(path: &Path, sensor: Option<&str>) -> anyhow::Result<LogSource> {
-    let opened = LogSource::open(path, &LogOptions::default())
-        .with_context(|| format!("opening the log {}", path.display()))?;
-    let Some(name) = sensor else {
-        return Ok(opened);
-    };
-    let p = name
+/// The geometry of the sensor preset `name`, as `--sensor NAME` overrides a log's.
+fn sensor_override(name: &str) -> anyhow::Result<GeometryOverride> {
+    let geometry = name
         .parse::<sim_laser::SensorPreset>()
         .map_err(|e| anyhow::anyhow!("--sensor {name}: {e}"))?
         .geometry();
-    let n = opened.geometry().ray_count;
-    if n != p.ray_count {
-        tracing::warn!(
-            "--sensor {name} has {} rays, the scans of {} have {n}: keeping {n} rays at the preset's spacing",
-            p.ray_count,
-            path.display()
-        );
-    }
-    let geometry = Some(ScanGeometry::new(
-        p.first_bearing_rad,
-        p.increment_rad,
-        n,
-        p.min_range_m,
-        p.max_range_m,
-    )?);
-    let options = LogOptions {
+    Ok(GeometryOverride {
+        name: format!("--sensor {name}"),
         geometry,
-        ..LogOptions::default()
-    };
-    LogSource::open(path, &options).with_context(|| format!("opening the log {}", path.display()))
-}
-
-/// A log source that starts again from the first scan at the end of the log (for the
-/// emulator, whose clients expect a sensor that never runs out).
-pub struct LoopingLog {
-    path: PathBuf,
-    sensor: Option<String>,
-    source: LogSource,
-    laps: usize,
-}
-
-impl LoopingLog {
-    /// Opens `path` (see [`open_log`]).
-    pub fn open(path: &Path, sensor: Option<&str>) -> anyhow::Result<LoopingLog> {
-        Ok(LoopingLog {
-            path: path.to_path_buf(),
-            sensor: sensor.map(str::to_string),
-            source: open_log(path, sensor)?,
-            laps: 0,
-        })
-    }
-
-    /// Times the log has been started again.
-    pub fn laps(&self) -> usize {
-        self.laps
-    }
-}
-
-impl scan_types::LaserSource for LoopingLog {
-    type Error = scan_log::LogError;
-
-    fn geometry(&self) -> &ScanGeometry {
-        self.source.geometry()
-    }
-
-    fn next_scan(&mut self) -> Result<Scan, Self::Error> {
-        match self.source.next_scan() {
-            Err(e) if e.is_end_of_log() && self.source.scans_read() > 0 => {
-                let options = LogOptions {
-                    geometry: Some(*self.source.geometry()),
-                    ..LogOptions::default()
-                };
-                self.source = LogSource::open(&self.path, &options)?;
-                self.laps += 1;
-                tracing::info!(
-                    "{}: end of log, starting again (lap {}, sensor {:?})",
-                    self.path.display(),
-                    self.laps + 1,
-                    self.sensor
-                );
-                self.source.next_scan()
-            }
-            r => r,
-        }
-    }
+    })
 }
 
 /// Name of the MCAP metadata record with the settings of a recorded simulated run.
@@ -418,50 +330,10 @@ impl MotionBase for NoMotion {
     }
 }
 
-/// A recording as the loop's laser, sharing the recorded true pose of the last scan with a
-/// [`RecordedTruth`].
-pub struct RecordedLaser {
-    source: LogSource,
-    truth: Rc<Cell<Option<Pose2>>>,
-}
-
-/// The recorded true pose of the last scan a [`RecordedLaser`] gave (no collisions known).
-pub struct RecordedTruth(Rc<Cell<Option<Pose2>>>);
-
-impl RecordedLaser {
-    /// Wraps a log source.
-    pub fn new(source: LogSource) -> (Self, RecordedTruth) {
-        let truth = Rc::new(Cell::new(None));
-        (
-            Self {
-                source,
-                truth: truth.clone(),
-            },
-            RecordedTruth(truth),
-        )
-    }
-
-    /// The log source.
-    pub fn source(&self) -> &LogSource {
-        &self.source
-    }
-}
-
-impl LaserSource for RecordedLaser {
-    type Error = scan_log::LogError;
-    fn geometry(&self) -> &ScanGeometry {
-        self.source.geometry()
-    }
-    fn next_scan(&mut self) -> Result<Scan, Self::Error> {
-        let rec = self.source.next_record()?;
-        self.truth.set(rec.true_pose);
-        Ok(rec.scan.clone())
-    }
-}
-
+// The recorded true poses as the loop's evaluation; a recording knows no collisions.
 impl Evaluation for RecordedTruth {
     fn true_pose(&self) -> Pose2 {
-        self.0.get().unwrap_or_default()
+        self.pose().unwrap_or_default()
     }
     fn collisions(&self) -> usize {
         0
@@ -501,7 +373,7 @@ pub fn replay_loop(
     )?;
     let scans_read = laser.source().scans_read();
     let mut scans_left = 0;
-    let mut rest = laser.source;
+    let mut rest = laser.into_source();
     while rest.next_record().is_ok() {
         scans_left += 1;
     }

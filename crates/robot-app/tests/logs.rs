@@ -7,7 +7,7 @@ use robot_app::cmd::map::build_map;
 use robot_app::cmd::replay::{self, ReplayArgs};
 use robot_app::cmd::scan::{self, ScanArgs, ScanFormat};
 use robot_app::record::{Recorder, open_log};
-use robot_app::scan_csv::read_scan_csv;
+use scan_log::read_scan_csv;
 use scan_types::{LaserSource, Pose2, RayStatus, Scan, ScanGeometry};
 use urg_driver::Model;
 

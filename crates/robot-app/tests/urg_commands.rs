@@ -58,7 +58,7 @@ fn scan_writes_csv_and_json() {
         &mut out,
     )
     .unwrap();
-    let (g, s) = robot_app::scan_csv::read_scan_csv(&out[..], "scan output").unwrap();
+    let (g, s) = scan_log::read_scan_csv(&out[..], "scan output").unwrap();
     assert_eq!(g.ray_count, 682);
     assert_eq!(s.ranges_m[340], 3.0);
     assert_eq!(
@@ -111,7 +111,7 @@ fn scan_sim_and_emulate_sim_agree() {
         &mut out,
     )
     .unwrap();
-    let (g, got) = robot_app::scan_csv::read_scan_csv(&out[..], "scan output").unwrap();
+    let (g, got) = scan_log::read_scan_csv(&out[..], "scan output").unwrap();
     assert_eq!(g.ray_count, direct.geometry().ray_count);
     let mut hits = 0;
     for i in 0..g.ray_count {
@@ -140,7 +140,7 @@ fn scan_sim_and_emulate_sim_agree() {
     args.pose = None; // the paper's start
     let mut out = Vec::new();
     scan::run_to(&args, &mut out).unwrap();
-    let (_, sim) = robot_app::scan_csv::read_scan_csv(&out[..], "sim output").unwrap();
+    let (_, sim) = scan_log::read_scan_csv(&out[..], "sim output").unwrap();
     for i in 0..g.ray_count {
         if want.status[i] == RayStatus::Hit {
             assert!((sim.ranges_m[i] - want.ranges_m[i]).abs() < 1e-5, "ray {i}");

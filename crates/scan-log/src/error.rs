@@ -85,6 +85,35 @@ pub enum LogError {
     /// A geometry read from the log or given by the caller is invalid.
     #[error("invalid geometry: {0}")]
     Geometry(#[from] scan_types::ScanTypesError),
+    /// A scan CSV (the form `robot-app scan` writes) has no first line.
+    #[error("{file}: empty file, expected a '# goalseek-scan' line")]
+    CsvEmpty {
+        /// The file (or `<stdin>`).
+        file: String,
+    },
+    /// A line of a scan CSV is unreadable or malformed; the message names the field.
+    #[error("{file}:{line}: {message}")]
+    Csv {
+        /// The file (or `<stdin>`).
+        file: String,
+        /// Line number, 1-based.
+        line: usize,
+        /// What is wrong, naming the geometry key or column.
+        message: String,
+        /// The underlying error (I/O, number parsing, geometry), if any.
+        #[source]
+        source: Option<Box<dyn std::error::Error + Send + Sync>>,
+    },
+    /// A scan CSV holds another number of rays than its geometry line says.
+    #[error("{file}: geometry says {expected} rays, file has {got}")]
+    CsvRayCount {
+        /// The file (or `<stdin>`).
+        file: String,
+        /// Rays in the geometry line.
+        expected: usize,
+        /// Ray rows in the file.
+        got: usize,
+    },
     /// The recorder was used after `finish`.
     #[error("{}: the recording is already finished", path.display())]
     Finished {

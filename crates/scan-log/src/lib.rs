@@ -8,6 +8,9 @@
 //!   exposes the recorded pose of the last scan ([`LogSource::pose`]).
 //! - [`McapRecorder`]: writes scans and poses to an MCAP file that Foxglove opens as it is,
 //!   atomically (temp file + rename); [`read_mcap`] reads it back bit for bit.
+//! - [`open_log`], [`LoopingLog`], [`RecordedLaser`]: a log played back as a laser, with a
+//!   geometry override, looping at its end, or with its recorded true poses.
+//! - [`write_scan_csv`], [`read_scan_csv`]: one scan as the CSV of `robot-app scan`.
 //!
 //! ```
 //! use scan_log::{LogOptions, LogSource};
@@ -26,8 +29,10 @@
 
 mod breezy;
 mod carmen;
+mod csv;
 mod error;
 mod mcap_io;
+mod playback;
 mod record;
 mod source;
 mod text;
@@ -36,11 +41,13 @@ pub use breezy::{
     BREEZY_HEADER_FIELDS, BREEZY_RAY_COUNT, URG_DMIN_MM, breezy_geometry, classify_mm,
 };
 pub use carmen::{CARMEN_DEFAULT_MAX_RANGE_M, flaser_geometry};
+pub use csv::{read_scan_csv, write_scan_csv};
 pub use error::LogError;
 pub use mcap_io::{
     EST_POSE_TOPIC, McapRecorder, MetadataRecord, SCAN_TOPIC, STATUS_HIT, STATUS_MAX_RANGE,
     TRUE_POSE_TOPIC, parse_mcap, partial_path, read_mcap, read_mcap_metadata, recording_schemas,
 };
+pub use playback::{GeometryOverride, LoopingLog, RecordedLaser, RecordedTruth, open_log};
 pub use record::LogRecord;
 pub use source::{LogFormat, LogOptions, LogReader, LogSource, open_text};
 pub use text::{TextFormat, TextLog};

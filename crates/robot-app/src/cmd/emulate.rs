@@ -55,7 +55,8 @@ pub fn start(args: &EmulateArgs) -> anyhow::Result<PtyServer> {
     let mut profile = Profile::of(args.model);
     profile.scip1_at_power_up = args.scip1;
     let server = if let Some(log) = &args.source {
-        let source = crate::record::LoopingLog::open(log, None)?;
+        let source = scan_log::LoopingLog::open(log, None)
+            .with_context(|| format!("opening the log {}", log.display()))?;
         emulator::serve_pty_with(urg_driver::SensorCore::new(
             profile,
             source,

@@ -7,9 +7,8 @@ use std::path::PathBuf;
 use anyhow::{Context, bail};
 use clap::Args;
 use expansion::{Expander, is_blocked};
+use scan_log::read_scan_csv;
 use scan_types::{RayStatus, ScanGeometry};
-
-use crate::scan_csv::read_scan_csv;
 
 /// Arguments of `robot-app expand`.
 #[derive(Debug, Args)]

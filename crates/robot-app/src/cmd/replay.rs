@@ -85,7 +85,7 @@ pub fn run_to<W: Write>(args: &ReplayArgs, out: &mut W) -> anyhow::Result<()> {
                 if k > 0 {
                     writeln!(out)?;
                 }
-                crate::scan_csv::write_scan_csv(&mut *out, &geometry, scan)?;
+                scan_log::write_scan_csv(&mut *out, &geometry, scan)?;
             }
             ScanFormat::Json => {
                 let mut v = crate::cmd::scan::scan_json(k, &geometry, scan);

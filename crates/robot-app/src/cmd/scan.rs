@@ -1,12 +1,14 @@
 //! `robot-app scan`: prints scans from a Hokuyo (or the simulator) as CSV or JSON.
 
 use std::io::Write;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use anyhow::Context;
 use clap::{Args, ValueEnum};
 use scan_types::{LaserSource, RayStatus, Scan, ScanGeometry};
 use urg_driver::{AcquisitionMode, Urg, UrgConfig};
+
+use crate::record::Recorder;
 
 /// Output format of `robot-app scan`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -114,9 +116,17 @@ pub fn run_to<W: Write>(args: &ScanArgs, out: &mut W) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// The recorder behind `--record FILE`.
-fn record_sink(path: &std::path::Path) -> anyhow::Result<ScanSink<'static>> {
-    crate::record::scan_sink(path)
+/// The recorder behind `--record FILE`: records every scan printed.
+fn record_sink(path: &Path) -> anyhow::Result<ScanSink<'static>> {
+    let mut rec: Option<Recorder> = None;
+    let path = path.to_path_buf();
+    Ok(Box::new(move |g: &ScanGeometry, s: &Scan| {
+        let r = match &mut rec {
+            Some(r) => r,
+            None => rec.insert(Recorder::create(&path, g)?),
+        };
+        r.record_scan(g, s, None, None)
+    }))
 }
 
 fn print_scans<S: LaserSource, W: Write>(
@@ -136,7 +146,7 @@ fn print_scans<S: LaserSource, W: Write>(
                 if k > 0 {
                     writeln!(out)?;
                 }
-                crate::scan_csv::write_scan_csv(&mut *out, &geometry, &scan)?;
+                scan_log::write_scan_csv(&mut *out, &geometry, &scan)?;
             }
             ScanFormat::Json => {
                 serde_json::to_writer(&mut *out, &scan_json(k, &geometry, &scan))?;

@@ -1,0 +1,237 @@
+//! The scan CSV form shared by `robot-app scan` (writer) and `robot-app expand` (reader).
+//!
+//! A first comment line carries the geometry, then a header and one row per ray:
+//!
+//! ```text
+//! # goalseek-scan first_bearing_rad=-2.0943951 increment_rad=0.0061234 ray_count=685 min_range_m=0 max_range_m=4 sensor_time_ms=-
+//! index,bearing_rad,range_m,valid
+//! 0,-2.094395102,1.234000,1
+//! ```
+//!
+//! `valid` is 1 for a real reading (a hit, or a max-range miss whose range equals
+//! `max_range_m`) and 0 for a sensor error (its range is written as `nan`).
+
+use std::io::{BufRead, Write};
+
+use scan_types::{RayStatus, Scan, ScanGeometry};
+
+use crate::LogError;
+
+/// The cause kept by [`LogError::Csv`].
+type Cause = Option<Box<dyn std::error::Error + Send + Sync>>;
+
+/// Writes one scan as CSV with its geometry line.
+pub fn write_scan_csv<W: Write>(
+    mut w: W,
+    geometry: &ScanGeometry,
+    scan: &Scan,
+) -> std::io::Result<()> {
+    let stamp = scan
+        .sensor_time_ms
+        .map_or_else(|| "-".to_string(), |t| t.to_string());
+    writeln!(
+        w,
+        "# goalseek-scan first_bearing_rad={} increment_rad={} ray_count={} min_range_m={} max_range_m={} sensor_time_ms={}",
+        geometry.first_bearing_rad,
+        geometry.increment_rad,
+        geometry.ray_count,
+        geometry.min_range_m,
+        geometry.max_range_m,
+        stamp
+    )?;
+    writeln!(w, "index,bearing_rad,range_m,valid")?;
+    for (i, (&r, s)) in scan.ranges_m.iter().zip(&scan.status).enumerate() {
+        let valid = u8::from(!matches!(s, RayStatus::Error(_)));
+        writeln!(w, "{i},{:.9},{:.6},{valid}", geometry.bearing_rad(i), r)?;
+    }
+    Ok(())
+}
+
+/// Reads a scan written by [`write_scan_csv`]; errors name the file and line.
+pub fn read_scan_csv<R: BufRead>(r: R, file: &str) -> Result<(ScanGeometry, Scan), LogError> {
+    let mut lines = r.lines().enumerate();
+    let Some((_, first)) = lines.next() else {
+        return Err(LogError::CsvEmpty {
+            file: file.to_string(),
+        });
+    };
+    let first = first.map_err(|e| csv_error(file, 1, "unreadable".into(), Some(e.into())))?;
+    let (geometry, stamp) = parse_geometry_line(&first, file)?;
+    let count = geometry.ray_count;
+
+    let mut ranges = Vec::with_capacity(count);
+    let mut status = Vec::with_capacity(count);
+    for (n, line) in lines {
+        let lineno = n + 1;
+        let line =
+            line.map_err(|e| csv_error(file, lineno, "unreadable".into(), Some(e.into())))?;
+        let line = line.trim();
+        if line.is_empty() || line.starts_with('#') || line.starts_with("index") {
+            continue;
+        }
+        let (range, st) = parse_row(line, ranges.len(), geometry.max_range_m, file, lineno)?;
+        ranges.push(range);
+        status.push(st);
+    }
+    if ranges.len() != count {
+        return Err(LogError::CsvRayCount {
+            file: file.to_string(),
+            expected: count,
+            got: ranges.len(),
+        });
+    }
+    let scan = Scan {
+        ranges_m: ranges,
+        status,
+        intensities: None,
+        sensor_time_ms: stamp.parse().ok(),
+        host_time_s: 0.0,
+    };
+    Ok((geometry, scan))
+}
+
+fn csv_error(file: &str, line: usize, message: String, source: Cause) -> LogError {
+    LogError::Csv {
+        file: file.to_string(),
+        line,
+        message,
+        source,
+    }
+}
+
+/// The geometry and the `sensor_time_ms` text of the first line.
+fn parse_geometry_line(first: &str, file: &str) -> Result<(ScanGeometry, String), LogError> {
+    let err = |message: String, source: Cause| csv_error(file, 1, message, source);
+    let Some(fields) = first.strip_prefix("# goalseek-scan ") else {
+        return Err(err(
+            format!("expected a '# goalseek-scan ...' geometry line, found {first:?}"),
+            None,
+        ));
+    };
+    let get = |key: &str| -> Result<String, LogError> {
+        fields
+            .split_whitespace()
+            .find_map(|kv| kv.strip_prefix(key).and_then(|v| v.strip_prefix('=')))
+            .map(str::to_string)
+            .ok_or_else(|| err(format!("geometry line has no {key}="), None))
+    };
+    let num = |key: &str, v: String| -> Result<f64, LogError> {
+        v.parse::<f64>()
+            .map_err(|e| err(format!("{key}={v} is not a number"), Some(e.into())))
+    };
+    let first_bearing = num("first_bearing_rad", get("first_bearing_rad")?)?;
+    let increment = num("increment_rad", get("increment_rad")?)?;
+    let count_s = get("ray_count")?;
+    let count: usize = count_s.parse().map_err(|e: std::num::ParseIntError| {
+        err(
+            format!("ray_count={count_s} is not a whole number"),
+            Some(e.into()),
+        )
+    })?;
+    let min_r = num("min_range_m", get("min_range_m")?)?;
+    let max_r = num("max_range_m", get("max_range_m")?)?;
+    let stamp = get("sensor_time_ms")?;
+    let geometry = ScanGeometry::new(first_bearing, increment, count, min_r, max_r)
+        .map_err(|e| err("bad geometry".into(), Some(e.into())))?;
+    Ok((geometry, stamp))
+}
+
+/// One ray row `index,bearing_rad,range_m,valid`: the range (NaN for an error) and status.
+fn parse_row(
+    line: &str,
+    expected_index: usize,
+    max_r: f64,
+    file: &str,
+    lineno: usize,
+) -> Result<(f64, RayStatus), LogError> {
+    let err = |message: String, source: Cause| csv_error(file, lineno, message, source);
+    let cols: Vec<&str> = line.split(',').collect();
+    if cols.len() != 4 {
+        return Err(err(
+            format!(
+                "expected 4 columns (index,bearing_rad,range_m,valid), found {}",
+                cols.len()
+            ),
+            None,
+        ));
+    }
+    let index: usize = cols[0].parse().map_err(|e: std::num::ParseIntError| {
+        err(
+            format!("index {:?} is not a whole number", cols[0]),
+            Some(e.into()),
+        )
+    })?;
+    if index != expected_index {
+        return Err(err(
+            format!("expected ray index {expected_index}, found {index}"),
+            None,
+        ));
+    }
+    let range: f64 = cols[2].parse().map_err(|e: std::num::ParseFloatError| {
+        err(
+            format!("range_m {:?} is not a number", cols[2]),
+            Some(e.into()),
+        )
+    })?;
+    let st = match cols[3] {
+        "0" => RayStatus::Error(0),
+        "1" if range.is_finite() && range >= max_r => RayStatus::MaxRange,
+        "1" if range.is_finite() && range >= 0.0 => RayStatus::Hit,
+        "1" => {
+            return Err(err(
+                format!("valid ray with range {range} out of bounds"),
+                None,
+            ));
+        }
+        other => {
+            return Err(err(format!("valid must be 0 or 1, found {other:?}"), None));
+        }
+    };
+    let range = match st {
+        RayStatus::Error(_) => f64::NAN,
+        RayStatus::MaxRange => max_r,
+        RayStatus::Hit => range,
+    };
+    Ok((range, st))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn round_trip_keeps_status() {
+        let g = ScanGeometry::centred(4, 1.0, 0.0, 4.0).unwrap();
+        let mut s = Scan::from_ranges(&g, &[1.25, 4.0, f64::NAN, 0.5], 0.0);
+        s.sensor_time_ms = Some(6968830);
+        let mut buf = Vec::new();
+        write_scan_csv(&mut buf, &g, &s).unwrap();
+        let (g2, s2) = read_scan_csv(&buf[..], "mem").unwrap();
+        assert_eq!(g2.ray_count, 4);
+        assert_eq!(s2.status, s.status);
+        assert_eq!(s2.ranges_m[0], 1.25);
+        assert_eq!(s2.sensor_time_ms, Some(6968830));
+    }
+
+    #[test]
+    fn errors_name_the_line() {
+        let text = "# goalseek-scan first_bearing_rad=0 increment_rad=0.1 ray_count=2 min_range_m=0 max_range_m=4 sensor_time_ms=-\nindex,bearing_rad,range_m,valid\n0,0,1.0,1\n1,0.1,abc,1\n";
+        let e = read_scan_csv(text.as_bytes(), "x.csv").unwrap_err();
+        assert!(format!("{e:#}").contains("x.csv:4"), "{e:#}");
+        assert!(
+            matches!(
+                &e,
+                LogError::Csv {
+                    line: 4,
+                    source: Some(_),
+                    ..
+                }
+            ),
+            "{e:?}"
+        );
+        let e = read_scan_csv("hello\n".as_bytes(), "y.csv").unwrap_err();
+        assert!(format!("{e:#}").contains("y.csv:1"), "{e:#}");
+        let e = read_scan_csv("".as_bytes(), "z.csv").unwrap_err();
+        assert!(matches!(e, LogError::CsvEmpty { .. }), "{e:?}");
+    }
+}
