@@ -19,6 +19,7 @@ fn allowed() -> BTreeMap<&'static str, BTreeSet<&'static str>> {
         "landmarks",
         "localiser",
         "navigator",
+        "slam",
     ];
     const METHOD: &[&str] = &[
         "scan-types",
@@ -42,6 +43,8 @@ fn allowed() -> BTreeMap<&'static str, BTreeSet<&'static str>> {
         ("landmarks", &["scan-types"]),
         ("localiser", &["scan-types"]),
         ("planner", &["scan-types", "expansion"]),
+        // Laser-only SLAM refines its correlative matches with the localiser's ICP.
+        ("slam", &["scan-types", "localiser"]),
         // Layer 3: the loop, on the method's parts only (no sensor, simulator or log).
         ("navigator", METHOD),
         // Layer 4: the program, and the root package that owns tests/ and benches/.

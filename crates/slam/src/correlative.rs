@@ -186,7 +186,7 @@ pub(crate) fn quality(grid: &ScoreGrid, points: &[[f64; 2]], pose: &Pose2) -> f6
 /// Depth-first over `candidates`, best first, skipping every block whose bound cannot beat
 /// the best leaf found.
 fn branch(scorer: &Scorer, mut candidates: Vec<Candidate>, best: &mut Option<Candidate>) {
-    candidates.sort_unstable_by(|a, b| b.score.cmp(&a.score));
+    candidates.sort_unstable_by_key(|c| std::cmp::Reverse(c.score));
     for c in candidates {
         if best.is_some_and(|b| c.score <= b.score) {
             return;
