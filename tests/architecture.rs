@@ -57,24 +57,30 @@ fn allowed() -> BTreeMap<&'static str, BTreeSet<&'static str>> {
         .collect()
 }
 
-fn metadata() -> serde_json::Value {
+/// The standard output of `cargo ARGS` in the workspace, which must succeed.
+fn cargo(args: &[&str]) -> Vec<u8> {
     let out = Command::new(env!("CARGO"))
-        .args([
-            "metadata",
-            "--format-version",
-            "1",
-            "--no-deps",
-            "--offline",
-        ])
+        .args(args)
         .current_dir(env!("CARGO_MANIFEST_DIR"))
         .output()
-        .expect("cargo metadata runs");
+        .expect("cargo runs");
     assert!(
         out.status.success(),
-        "cargo metadata failed: {}",
+        "cargo {args:?} failed: {}",
         String::from_utf8_lossy(&out.stderr)
     );
-    serde_json::from_slice(&out.stdout).expect("cargo metadata prints JSON")
+    out.stdout
+}
+
+fn metadata() -> serde_json::Value {
+    let out = cargo(&[
+        "metadata",
+        "--format-version",
+        "1",
+        "--no-deps",
+        "--offline",
+    ]);
+    serde_json::from_slice(&out).expect("cargo metadata prints JSON")
 }
 
 /// Workspace package name -> names of the workspace packages it depends on.
@@ -124,26 +130,17 @@ fn every_edge_is_allowed() {
 /// serial crate, directly or through another crate (dev-dependencies included).
 #[test]
 fn the_navigator_pulls_in_no_program_crate() {
-    let out = Command::new(env!("CARGO"))
-        .args([
-            "tree",
-            "-p",
-            "navigator",
-            "--edges",
-            "normal,build,dev",
-            "--prefix",
-            "none",
-            "--offline",
-        ])
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .output()
-        .expect("cargo tree runs");
-    assert!(
-        out.status.success(),
-        "cargo tree failed: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let text = String::from_utf8_lossy(&out.stdout);
+    let out = cargo(&[
+        "tree",
+        "-p",
+        "navigator",
+        "--edges",
+        "normal,build,dev",
+        "--prefix",
+        "none",
+        "--offline",
+    ]);
+    let text = String::from_utf8_lossy(&out);
     let names: BTreeSet<&str> = text
         .lines()
         .filter_map(|l| l.split_whitespace().next())
