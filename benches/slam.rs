@@ -17,7 +17,12 @@ use slam::{FrontEnd, FrontEndParams, Placement};
 fn scans(rel: &str) -> Option<Vec<(ScanGeometry, Scan)>> {
     let p = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/data/")).join(rel);
     let reader = LogReader::open(&p, &LogOptions::default()).ok()?;
-    Some(reader.filter_map(Result::ok).map(|r| (r.geometry, r.scan)).collect())
+    Some(
+        reader
+            .filter_map(Result::ok)
+            .map(|r| (r.geometry, r.scan))
+            .collect(),
+    )
 }
 
 fn placed(scans: &[(ScanGeometry, Scan)]) -> usize {
