@@ -2,7 +2,7 @@
 
 use scan_types::Pose2;
 
-/// Tuning of [`MatchTarget::align`].
+/// Tuning of [`MatchTarget::align`](crate::MatchTarget::align).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct MatchParams {
     /// Most Gauss-Newton iterations.

@@ -1,6 +1,6 @@
 //! `robot-app batch`: many simulated runs in parallel, a summary table and `batch.json`.
 //!
-//! [`jobs`] turns the arguments into simulated runs, [`table`] turns their summaries into rows,
+//! [`jobs`] turns the arguments into simulated runs, [`mod@table`] turns their summaries into rows,
 //! aggregates and the table.
 
 pub mod jobs;
