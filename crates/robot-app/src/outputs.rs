@@ -154,15 +154,15 @@ pub fn trajectory_csv(log: &RunLog) -> String {
     s
 }
 
-/// A TUM trajectory (`timestamp tx ty tz qx qy qz qw`, the leg number as the time stamp).
-pub fn tum(poses: impl IntoIterator<Item = (usize, Pose2)>) -> String {
+/// A TUM trajectory (`timestamp tx ty tz qx qy qz qw`) of `(time stamp, pose)` rows.
+pub fn tum(poses: impl IntoIterator<Item = (f64, Pose2)>) -> String {
     let mut s = String::new();
-    for (leg, p) in poses {
+    for (t, p) in poses {
         let half = p.theta_rad / 2.0;
         let _ = writeln!(
             s,
             "{:.6} {:.6} {:.6} 0.000000 0.000000 0.000000 {:.9} {:.9}",
-            leg as f64,
+            t,
             p.x_m,
             p.y_m,
             half.sin(),
@@ -177,12 +177,16 @@ pub fn write_trajectory(dir: &Path, log: &RunLog) -> anyhow::Result<()> {
     write_atomic(&dir.join("trajectory.csv"), trajectory_csv(log).as_bytes())?;
     write_atomic(
         &dir.join("estimate.tum"),
-        tum(log.legs.iter().map(|r| (r.leg, r.estimate))).as_bytes(),
+        tum(log.legs.iter().map(|r| (r.leg as f64, r.estimate))).as_bytes(),
     )?;
     if log.legs.iter().any(|r| r.truth.is_some()) {
         write_atomic(
             &dir.join("truth.tum"),
-            tum(log.legs.iter().filter_map(|r| r.truth.map(|t| (r.leg, t)))).as_bytes(),
+            tum(log
+                .legs
+                .iter()
+                .filter_map(|r| r.truth.map(|t| (r.leg as f64, t))))
+            .as_bytes(),
         )?;
     }
     Ok(())
@@ -222,7 +226,7 @@ mod tests {
 
     #[test]
     fn tum_quaternion_of_a_quarter_turn() {
-        let t = tum([(3, Pose2::new(1.0, 2.0, FRAC_PI_2))]);
+        let t = tum([(3.0, Pose2::new(1.0, 2.0, FRAC_PI_2))]);
         let f: Vec<f64> = t.split_whitespace().map(|x| x.parse().unwrap()).collect();
         assert_eq!(f.len(), 8);
         assert_eq!(f[0], 3.0);

@@ -14,7 +14,7 @@ use serde::Serialize;
 use slam::eval::{RelativeError, Stats, absolute_error, relative_error};
 use slam::{FrontEnd, FrontEndParams, Placement};
 
-use crate::outputs::write_atomic;
+use crate::outputs::{tum, write_atomic};
 
 /// Arguments of `robot-app slam`.
 #[derive(Debug, Args)]
@@ -260,24 +260,6 @@ fn evaluate(placed: &[Placed]) -> Option<Evaluation> {
         relative_10: relative_error(&est, &reference, 10).ok(),
         absolute_m: absolute_error(&est, &reference).ok()?,
     })
-}
-
-/// TUM text (`time x y z qx qy qz qw`) of `(time, pose)` pairs.
-pub fn tum(rows: impl IntoIterator<Item = (f64, Pose2)>) -> String {
-    use std::fmt::Write as _;
-    let mut s = String::new();
-    for (t, p) in rows {
-        let half = p.theta_rad / 2.0;
-        let _ = writeln!(
-            s,
-            "{t:.6} {:.6} {:.6} 0 0 0 {:.9} {:.9}",
-            p.x_m,
-            p.y_m,
-            half.sin(),
-            half.cos()
-        );
-    }
-    s
 }
 
 /// Writes `trajectory.tum`, `reference.tum` (when the log has poses), the maps and

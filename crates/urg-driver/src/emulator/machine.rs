@@ -141,12 +141,7 @@ impl<S: LaserSource> SensorCore<S> {
     }
 
     pub(super) fn reply(&mut self, echo: &[u8], status: Status) {
-        self.begin_reply();
-        self.out.extend(echo);
-        self.out.push_back(LF);
-        let mut v = Vec::with_capacity(4);
-        encode_status_line(status, &mut v);
-        self.out.extend(v);
+        self.reply_no_blank(echo, status);
         self.out.push_back(LF);
     }
 
