@@ -9,6 +9,15 @@ use crate::{Navigator, TravelRule};
 
 /// Bearing of the side rays.
 const SIDE_RAD: f64 = std::f64::consts::FRAC_PI_2;
+/// Shares of the commanded travel tried as well when matching, so that a base that stalls or
+/// slips is seen by the laser rather than assumed to have done what it was told.
+const PARTIAL_SHARES: [f64; 4] = [0.0, 0.25, 0.5, 0.75];
+/// Partial shares are tried from this much commanded travel on, metres.
+const PARTIAL_MIN_M: f64 = 0.1;
+/// A match explains a scan when it pairs at least this share of its hits.
+const EXPLAINED_SHARE: f64 = 0.6;
+/// A match leaves the travel to the laser when its worst direction is known this well, metres.
+const CONSTRAINED_SIGMA_M: f64 = 0.05;
 
 /// What a leg is for.
 #[derive(Debug, Clone, Copy)]
@@ -43,6 +52,9 @@ pub(crate) struct Drive {
     pub(crate) commanded_m: f64,
     /// Measured travel at the last fix and the commanded travel at that fix.
     fix: Option<(f64, f64)>,
+    /// True when the last travel estimate came from a well-constrained scan match (the
+    /// laser), not from the commands or a landmark fix alone.
+    pub(crate) laser_measured: bool,
     pub(crate) last_scan: Scan,
 }
 
@@ -78,6 +90,7 @@ impl Drive {
             key,
             commanded_m: 0.0,
             fix: None,
+            laser_measured: false,
             last_scan: scan,
         }
     }
@@ -135,7 +148,7 @@ impl Drive {
         if let Some((pose, at, target)) = self.key.as_mut()
             && measured - *at >= nav.params.localiser.keyframe_m
         {
-            *pose = matched(nav, target, pose, measured - *at, scan, &self.match_params);
+            (*pose, _) = matched(nav, target, pose, measured - *at, scan, &self.match_params);
             *at = measured;
             *target = MatchTarget::from_scan(&nav.geometry, scan, &self.match_params);
         }
@@ -148,22 +161,30 @@ impl Drive {
     pub(crate) fn travelled(&mut self, nav: &Navigator) -> Pose2 {
         let measured = self.measured_m();
         match self.key.as_mut() {
-            Some((pose, at, target)) => matched(
-                nav,
-                target,
-                pose,
-                measured - *at,
-                &self.last_scan,
-                &self.match_params,
-            ),
-            None => Pose2::new(measured, 0.0, 0.0),
+            Some((pose, at, target)) => {
+                let (rel, constrained) = matched(
+                    nav,
+                    target,
+                    pose,
+                    measured - *at,
+                    &self.last_scan,
+                    &self.match_params,
+                );
+                self.laser_measured = constrained;
+                rel
+            }
+            None => {
+                self.laser_measured = false;
+                Pose2::new(measured, 0.0, 0.0)
+            }
         }
     }
 }
 
 /// The pose of `scan` relative to the start of the drive: matched against `target` (the
-/// reference scan taken at `key`), starting from `key` advanced by `ahead_m`; the guess itself
-/// when the match fails.
+/// reference scan taken at `key`), starting from `key` advanced by `ahead_m` and from shares
+/// of it (the base may have stalled or slipped); the guess itself when no match succeeds.
+/// The flag is true when the match pinned the travel down.
 fn matched(
     nav: &Navigator,
     target: &mut MatchTarget,
@@ -171,15 +192,35 @@ fn matched(
     ahead_m: f64,
     scan: &Scan,
     params: &MatchParams,
-) -> Pose2 {
+) -> (Pose2, bool) {
     let guess = Pose2::new(ahead_m, 0.0, 0.0);
     // The guess is as good as the drive: its error grows with the distance.
     let l = &nav.params.localiser;
-    let params = &MatchParams {
+    let prior = MatchParams {
         prior_sigma_m: l.match_prior_m + l.match_prior_per_m * ahead_m.abs(),
         ..*params
     };
-    match target.align(&nav.geometry, scan, guess, params) {
+    let mut best = target.align(&nav.geometry, scan, guess, &prior);
+    let hits = scan.robot_hits(&nav.geometry).count();
+    let explains = |m: &localiser::ScanMatch| m.pairs as f64 >= EXPLAINED_SHARE * hits as f64;
+    if ahead_m.abs() >= PARTIAL_MIN_M && !best.as_ref().is_some_and(explains) {
+        // The commands do not explain the scan: try partial travel, a hypothesis of the
+        // laser's, without pull toward the commands.
+        let loose = MatchParams {
+            prior_sigma_m: ahead_m.abs(),
+            ..*params
+        };
+        for share in PARTIAL_SHARES {
+            let seed = Pose2::new(share * ahead_m, 0.0, 0.0);
+            if let Some(m) = target.align(&nav.geometry, scan, seed, &loose)
+                && explains(&m)
+                && fits_better(&m, best.as_ref())
+            {
+                best = Some(m);
+            }
+        }
+    }
+    match best {
         Some(m) => {
             tracing::debug!(
                 ahead_m,
@@ -187,15 +228,36 @@ fn matched(
                 dy = m.pose.y_m,
                 dth_deg = m.pose.theta_rad.to_degrees(),
                 sig = m.worst_sigma_m,
+                data_sig = m.data_worst_sigma_m,
                 rms = m.rms_m,
                 pairs = m.pairs,
+                hits,
                 "scan match"
             );
-            key.compose(&m.pose)
+            (
+                key.compose(&m.pose),
+                m.data_worst_sigma_m <= CONSTRAINED_SIGMA_M,
+            )
         }
         None => {
             tracing::debug!(ahead_m, "scan match failed; keeping the landmark's travel");
-            key.compose(&guess)
+            (key.compose(&guess), false)
+        }
+    }
+}
+
+/// True when match `m` explains the scan clearly better than `current`: more points paired
+/// and no worse a fit, along a direction the data pin down (in a featureless corridor every
+/// travel fits alike, and the commands stand).
+fn fits_better(m: &localiser::ScanMatch, current: Option<&localiser::ScanMatch>) -> bool {
+    if m.data_worst_sigma_m > CONSTRAINED_SIGMA_M {
+        return false;
+    }
+    match current {
+        None => true,
+        Some(c) => {
+            let moved = (m.pose.x_m - c.pose.x_m).hypot(m.pose.y_m - c.pose.y_m);
+            moved > 0.02 && m.pairs as f64 >= 1.15 * c.pairs as f64 && m.rms_m <= 1.2 * c.rms_m
         }
     }
 }

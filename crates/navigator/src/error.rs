@@ -12,13 +12,13 @@ pub enum NavigatorError {
         /// Its value, as text.
         value: String,
         /// What it must satisfy.
-        requirement: &'static str,
+        requirement: String,
     },
     /// A method name that is not a preset.
     #[error("unknown method '{0}' (expected paper or goalseek)")]
     UnknownMethod(String),
-    /// A start pose or goal that is not finite.
-    #[error("{what} ({value}) must be finite")]
+    /// A start pose or goal that is not finite or lies beyond [`crate::MAX_COORD_M`].
+    #[error("{what} ({value}) must be finite, with coordinates within +-1000 km")]
     NotFinite {
         /// What was given (start or goal).
         what: &'static str,

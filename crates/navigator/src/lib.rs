@@ -38,3 +38,6 @@ pub use params::{
     PlanningParams, RobotParams, TrackingParams, TravelRule,
 };
 pub use run::{Monitor, NoMonitor, run};
+
+/// Largest start or goal coordinate the navigator accepts, metres (1000 km).
+pub const MAX_COORD_M: f64 = 1e6;

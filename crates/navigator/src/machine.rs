@@ -7,6 +7,10 @@ use localiser::OccupancyGrid;
 use planner::{Plan, Planner};
 use scan_types::{Pose2, Scan, ScanGeometry, WorldPoint};
 
+use crate::MAX_COORD_M;
+
+/// Legs commanded shorter than this are not judged for a stall, metres.
+const STALL_JUDGED_M: f64 = 0.2;
 use crate::clearance::{block_by_unseen_hits, erode};
 use crate::drive::{Drive, LegKind};
 use crate::{HeadingRule, Leg, NavigatorError, Outcome, Params, PlanRule, Reason};
@@ -106,6 +110,8 @@ pub struct Navigator {
     spot: (WorldPoint, Vec<WorldPoint>),
     /// Planning failures in a row.
     failures: usize,
+    /// Stalled legs in a row: commanded to drive, and the laser saw (almost) no motion.
+    stalled_legs: usize,
     state: State,
     pending: Action,
     end: Option<(Reason, String)>,
@@ -128,14 +134,15 @@ impl Navigator {
                 Err(NavigatorError::NotFinite { what, value })
             }
         };
+        let coord = |v: f64| v.is_finite() && v.abs() <= MAX_COORD_M;
         finite(
             "start",
-            start.x_m.is_finite() && start.y_m.is_finite() && start.theta_rad.is_finite(),
+            coord(start.x_m) && coord(start.y_m) && start.theta_rad.is_finite(),
             format!("{}, {}, {}", start.x_m, start.y_m, start.theta_rad),
         )?;
         finite(
             "goal",
-            goal.x_m().is_finite() && goal.y_m().is_finite(),
+            coord(goal.x_m()) && coord(goal.y_m()),
             format!("{}, {}", goal.x_m(), goal.y_m()),
         )?;
         let (detect_params, select_params, track_params) = params.landmark_params();
@@ -161,6 +168,7 @@ impl Navigator {
             first_leg: None,
             spot: (start.position(), Vec::new()),
             failures: 0,
+            stalled_legs: 0,
             state: State::Starting,
             pending: Action::Scan,
             end: None,
@@ -595,6 +603,7 @@ impl Navigator {
         let mut drive = *drive;
         let rel = drive.travelled(self);
         self.estimate = drive.origin.compose(&rel);
+        let judged = (drive.laser_measured, drive.commanded_m);
         let scan = drive.last_scan;
         self.integrate(&scan);
         match drive.kind {
@@ -607,6 +616,9 @@ impl Navigator {
         // reports a target cut off on the map.
         let before_leg = drive.origin.position();
         let moved = before_leg.distance_m(&self.estimate.position());
+        if let Some(action) = self.check_stall(judged, moved) {
+            return action;
+        }
         let progress = match self.params.planner.rule {
             PlanRule::Greedy => {
                 before_leg.distance_m(&self.goal) - self.estimate.position().distance_m(&self.goal)
@@ -619,6 +631,36 @@ impl Navigator {
             self.failures = 0;
         }
         self.plan_next(scan)
+    }
+
+    /// Counts a leg on which the laser saw less than `stall_share` of the commanded travel;
+    /// `stall_legs` of them in a row end the run as base_stalled.
+    /// `(laser_measured, commanded_m)` are the drive's.
+    fn check_stall(
+        &mut self,
+        (laser_measured, commanded_m): (bool, f64),
+        moved_m: f64,
+    ) -> Option<Action> {
+        let n = &self.params.navigator;
+        let judged = laser_measured && commanded_m >= STALL_JUDGED_M;
+        if !(judged && moved_m < n.stall_share * commanded_m) {
+            self.stalled_legs = 0;
+            return None;
+        }
+        self.stalled_legs += 1;
+        tracing::warn!(
+            commanded_m,
+            measured_m = moved_m,
+            stalled_legs = self.stalled_legs,
+            "the laser saw the robot not move as commanded"
+        );
+        (self.stalled_legs >= n.stall_legs).then(|| {
+            let note = format!(
+                "the base was told to drive {:.2} m and the laser measured {:.2} m, {} legs in a row",
+                commanded_m, moved_m, self.stalled_legs
+            );
+            self.finish(Reason::BaseStalled, note)
+        })
     }
 
     /// A landmark to measure travel by on a leg without a goal landmark: the nearest stable

@@ -16,8 +16,14 @@ pub enum Reason {
     LegLimit,
     /// The robot touched an obstacle (reported by the caller, e.g. a simulator).
     Collision,
-    /// The laser or the base failed (reported by the caller).
+    /// The laser failed or was lost for good (reported by the caller).
     SensorFailure,
+    /// The base reported an error (reported by the caller).
+    BaseFailure,
+    /// The scans show that the robot does not move when told to drive.
+    BaseStalled,
+    /// The operator stopped the run (Ctrl-C, SIGTERM; reported by the caller).
+    Interrupted,
 }
 
 impl std::fmt::Display for Reason {
@@ -28,6 +34,9 @@ impl std::fmt::Display for Reason {
             Reason::LegLimit => "leg_limit",
             Reason::Collision => "collision",
             Reason::SensorFailure => "sensor_failure",
+            Reason::BaseFailure => "base_failure",
+            Reason::BaseStalled => "base_stalled",
+            Reason::Interrupted => "interrupted",
         })
     }
 }

@@ -193,6 +193,11 @@ pub struct LoopParams {
     pub min_progress_m: f64,
     /// Length of a leg without a landmark in front, metres.
     pub short_leg_m: f64,
+    /// A leg is stalled when the laser measures less than this share of the commanded travel
+    /// (0 to 1; legs of less than 0.2 m commanded are not judged).
+    pub stall_share: f64,
+    /// Stalled legs in a row that end the run as base_stalled.
+    pub stall_legs: usize,
 }
 
 /// Every tuning parameter of a run.
@@ -275,6 +280,8 @@ impl Params {
                 min_leg_m: 0.05,
                 min_progress_m: 0.05,
                 short_leg_m: 1.0,
+                stall_share: 0.25,
+                stall_legs: 2,
             },
         }
     }
@@ -302,61 +309,192 @@ impl Params {
         }
     }
 
-    /// Checks every value against its valid range; the error names the key.
+    /// Checks every value against its valid range ([`Params::ranges`]); the error names the
+    /// key.
     pub fn validate(&self) -> Result<(), NavigatorError> {
-        let r = &self.robot;
-        let p = &self.planner;
-        let l = &self.landmarks;
-        let t = &self.tracking;
-        let z = &self.localiser;
-        let n = &self.navigator;
-        for (key, v) in [
-            ("robot.radius_m", r.radius_m),
-            ("planner.min_travel_m", p.min_travel_m),
-            ("planner.max_leg_m", p.max_leg_m),
-            ("planner.grid_resolution_m", p.grid_resolution_m),
-            ("landmarks.max_bearing_deg", l.max_bearing_deg),
-            ("landmarks.min_jump_m", l.min_jump_m),
-            ("tracking.step_m", t.step_m),
-            ("tracking.gate_m", t.gate_m),
-            ("localiser.rotation_search_deg", z.rotation_search_deg),
-            ("localiser.keyframe_m", z.keyframe_m),
-            ("localiser.match_prior_m", z.match_prior_m),
-            ("localiser.turn_match_prior_m", z.turn_match_prior_m),
-            ("localiser.turn_match_gate_m", z.turn_match_gate_m),
-            ("localiser.map_resolution_m", z.map_resolution_m),
-            ("navigator.goal_tolerance_m", n.goal_tolerance_m),
-            ("navigator.recovery_turn_deg", n.recovery_turn_deg),
-            ("navigator.rotation_chunk_deg", n.rotation_chunk_deg),
-            ("navigator.short_leg_m", n.short_leg_m),
-        ] {
-            if !(v.is_finite() && v > 0.0) {
-                return Err(invalid(key, v, "must be a positive number"));
+        for (key, v, lo, hi, open_low) in self.ranges() {
+            let ok = v.is_finite() && (if open_low { v > lo } else { v >= lo }) && v <= hi;
+            if !ok {
+                let low = if open_low { "above" } else { "at least" };
+                return Err(invalid(
+                    key,
+                    v,
+                    &format!("must be {low} {lo} and at most {hi}"),
+                ));
             }
         }
-        for (key, v) in [
-            ("robot.expansion_margin_m", r.expansion_margin_m),
-            ("planner.width_window_deg", p.width_window_deg),
-            ("landmarks.range_limit_margin_m", l.range_limit_margin_m),
-            ("landmarks.min_ob_m", l.min_ob_m),
-            ("landmarks.min_cb_m", l.min_cb_m),
-            ("localiser.match_prior_per_m", z.match_prior_per_m),
-            ("navigator.free_ahead_window_deg", n.free_ahead_window_deg),
-            ("navigator.final_leg_bearing_deg", n.final_leg_bearing_deg),
-            ("navigator.min_leg_m", n.min_leg_m),
-            ("navigator.min_progress_m", n.min_progress_m),
-        ] {
-            if !(v.is_finite() && v >= 0.0) {
-                return Err(invalid(key, v, "must be a number >= 0"));
-            }
-        }
-        if l.neighbour_n == 0 {
-            return Err(invalid("landmarks.neighbour_n", 0, "must be at least 1"));
-        }
-        if n.max_legs == 0 {
-            return Err(invalid("navigator.max_legs", 0, "must be at least 1"));
+        if self.planner.max_leg_m < self.planner.min_travel_m {
+            return Err(invalid(
+                "planner.max_leg_m",
+                self.planner.max_leg_m,
+                "must be at least planner.min_travel_m",
+            ));
         }
         Ok(())
+    }
+
+    /// Every numeric key with its value and valid range: `(key, value, low, high, low is
+    /// excluded)`.
+    pub fn ranges(&self) -> Vec<(&'static str, f64, f64, f64, bool)> {
+        let (r, p, l, t) = (&self.robot, &self.planner, &self.landmarks, &self.tracking);
+        let (z, n) = (&self.localiser, &self.navigator);
+        let count = |v: usize| v as f64;
+        vec![
+            ("robot.radius_m", r.radius_m, 0.0, 5.0, true),
+            (
+                "robot.expansion_margin_m",
+                r.expansion_margin_m,
+                0.0,
+                2.0,
+                false,
+            ),
+            ("planner.min_travel_m", p.min_travel_m, 0.0, 20.0, true),
+            ("planner.max_leg_m", p.max_leg_m, 0.0, 100.0, true),
+            (
+                "planner.grid_resolution_m",
+                p.grid_resolution_m,
+                0.01,
+                1.0,
+                false,
+            ),
+            (
+                "planner.width_window_deg",
+                p.width_window_deg,
+                0.0,
+                90.0,
+                false,
+            ),
+            (
+                "landmarks.neighbour_n",
+                count(l.neighbour_n),
+                1.0,
+                100.0,
+                false,
+            ),
+            (
+                "landmarks.max_bearing_deg",
+                l.max_bearing_deg,
+                0.0,
+                180.0,
+                true,
+            ),
+            (
+                "landmarks.range_limit_margin_m",
+                l.range_limit_margin_m,
+                0.0,
+                10.0,
+                false,
+            ),
+            ("landmarks.min_jump_m", l.min_jump_m, 0.0, 10.0, true),
+            ("landmarks.min_ob_m", l.min_ob_m, 0.0, 10.0, false),
+            ("landmarks.min_cb_m", l.min_cb_m, 0.0, 10.0, false),
+            ("tracking.step_m", t.step_m, 0.0, 5.0, true),
+            ("tracking.gate_m", t.gate_m, 0.0, 5.0, true),
+            (
+                "tracking.max_missed_scans",
+                count(t.max_missed_scans),
+                0.0,
+                1000.0,
+                false,
+            ),
+            (
+                "localiser.rotation_search_deg",
+                z.rotation_search_deg,
+                0.0,
+                180.0,
+                true,
+            ),
+            ("localiser.keyframe_m", z.keyframe_m, 0.0, 100.0, true),
+            ("localiser.match_prior_m", z.match_prior_m, 0.0, 10.0, true),
+            (
+                "localiser.match_prior_per_m",
+                z.match_prior_per_m,
+                0.0,
+                10.0,
+                false,
+            ),
+            (
+                "localiser.turn_match_prior_m",
+                z.turn_match_prior_m,
+                0.0,
+                10.0,
+                true,
+            ),
+            (
+                "localiser.turn_match_gate_m",
+                z.turn_match_gate_m,
+                0.0,
+                5.0,
+                true,
+            ),
+            (
+                "localiser.map_resolution_m",
+                z.map_resolution_m,
+                0.01,
+                1.0,
+                false,
+            ),
+            ("navigator.max_legs", count(n.max_legs), 1.0, 1e6, false),
+            (
+                "navigator.goal_tolerance_m",
+                n.goal_tolerance_m,
+                0.0,
+                10.0,
+                true,
+            ),
+            (
+                "navigator.max_failed_tries",
+                count(n.max_failed_tries),
+                1.0,
+                1000.0,
+                false,
+            ),
+            (
+                "navigator.recovery_turn_deg",
+                n.recovery_turn_deg,
+                0.0,
+                180.0,
+                true,
+            ),
+            (
+                "navigator.rotation_chunk_deg",
+                n.rotation_chunk_deg,
+                0.0,
+                180.0,
+                true,
+            ),
+            (
+                "navigator.free_ahead_window_deg",
+                n.free_ahead_window_deg,
+                0.0,
+                90.0,
+                false,
+            ),
+            (
+                "navigator.final_leg_bearing_deg",
+                n.final_leg_bearing_deg,
+                0.0,
+                90.0,
+                false,
+            ),
+            ("navigator.min_leg_m", n.min_leg_m, 0.0, 10.0, false),
+            (
+                "navigator.min_progress_m",
+                n.min_progress_m,
+                0.0,
+                10.0,
+                false,
+            ),
+            ("navigator.short_leg_m", n.short_leg_m, 0.0, 100.0, true),
+            ("navigator.stall_share", n.stall_share, 0.0, 1.0, false),
+            (
+                "navigator.stall_legs",
+                count(n.stall_legs),
+                1.0,
+                1000.0,
+                false,
+            ),
+        ]
     }
 
     /// Landmark detection, selection and tracking parameters: the method's preset with the
@@ -411,11 +549,11 @@ impl Params {
     }
 }
 
-fn invalid(key: &'static str, value: impl ToString, requirement: &'static str) -> NavigatorError {
+fn invalid(key: &'static str, value: impl ToString, requirement: &str) -> NavigatorError {
     NavigatorError::InvalidParam {
         key,
         value: value.to_string(),
-        requirement,
+        requirement: requirement.to_string(),
     }
 }
 

@@ -16,6 +16,11 @@ pub trait Monitor {
     fn collision(&mut self) -> Option<String> {
         None
     }
+    /// Before every action: `Some(note)` ends the run as interrupted (Ctrl-C, SIGTERM, an
+    /// operator's stop).
+    fn interrupted(&mut self) -> Option<String> {
+        None
+    }
 }
 
 /// A [`Monitor`] that watches nothing.
@@ -38,6 +43,11 @@ where
 {
     let mut action = nav.pending();
     loop {
+        if !matches!(action, Action::Finish(_))
+            && let Some(note) = monitor.interrupted()
+        {
+            action = nav.fail(Reason::Interrupted, note);
+        }
         action = match action {
             Action::Scan => match laser.next_scan() {
                 Ok(scan) => {
@@ -83,6 +93,6 @@ fn motion_done<E: std::fmt::Display>(
                 None => next,
             }
         }
-        Err(e) => nav.fail(Reason::SensorFailure, format!("base: {e}")),
+        Err(e) => nav.fail(Reason::BaseFailure, format!("base: {e}")),
     }
 }

@@ -10,6 +10,12 @@ const STRAIGHT: u32 = 10;
 const DIAGONAL: u32 = 14;
 /// "No path".
 const UNREACHED: u32 = u32::MAX;
+/// The most cells the grid grows to (400 m square at 0.1 m); beyond it, new places count as
+/// unknown (free), so that memory stays bounded however far the robot is sent.
+pub const MAX_CELLS: usize = 1 << 24;
+/// The grid grows to hold the target only while it stays within this many cells (100 m square
+/// at 0.1 m); a farther target is reached through the unknown around the grid.
+pub const TARGET_CELLS: usize = 1 << 20;
 
 /// Hits remembered on a coarse grid, and the path length of every cell to a target.
 #[derive(Debug, Clone)]
@@ -28,9 +34,15 @@ pub struct ObstacleMemory {
     stamp: Vec<(i32, i32)>,
     /// Bumped whenever the set of blocked cells changes.
     version: u64,
-    /// The path-length field (tenths of a cell) and what it was computed for.
+    /// Set once the grid has refused to grow past [`MAX_CELLS`].
+    full: bool,
+    /// The path-length field (tenths of a cell, above `field_base_m`) and what it was
+    /// computed for: the memory's version and the target's cell (which may lie off the grid).
     field: Vec<u32>,
-    field_key: Option<(u64, usize)>,
+    field_base_m: f64,
+    field_key: Option<(u64, (i64, i64))>,
+    /// Scratch of the wavefront: seeds not yet due, (cost, cell), costliest first.
+    seeds: Vec<(u32, u32)>,
     /// Scratch of the wavefront: one bucket per cost modulo the bucket count.
     buckets: Vec<Vec<u32>>,
     /// Scratch of the wavefront: the bucket being expanded.
@@ -62,8 +74,11 @@ impl ObstacleMemory {
             blocked: Vec::new(),
             stamp,
             version: 0,
+            full: false,
             field: Vec::new(),
+            field_base_m: 0.0,
             field_key: None,
+            seeds: Vec::new(),
             buckets: vec![Vec::new(); (DIAGONAL + 1) as usize],
             popped: Vec::new(),
             passable: Vec::new(),
@@ -73,6 +88,11 @@ impl ObstacleMemory {
     /// Cell size, metres.
     pub fn resolution_m(&self) -> f64 {
         self.resolution_m
+    }
+
+    /// Number of cells in the grid.
+    pub fn cell_count(&self) -> usize {
+        self.width * self.height
     }
 
     /// Number of cells holding at least one hit.
@@ -101,6 +121,11 @@ impl ObstacleMemory {
 
     /// Grows the grid (keeping its content) so that `p` lies inside with room around it.
     pub fn ensure_contains(&mut self, p: WorldPoint) {
+        self.grow_to(p, MAX_CELLS);
+    }
+
+    /// [`ObstacleMemory::ensure_contains`] unless the grid would exceed `max_cells`.
+    fn grow_to(&mut self, p: WorldPoint, max_cells: usize) {
         let (x, y) = (p.x_m(), p.y_m());
         if !(x.is_finite() && y.is_finite()) {
             return;
@@ -139,8 +164,21 @@ impl ObstacleMemory {
                 self.origin.1 - ((self.origin.1 - y0) / res).ceil() * res,
             )
         };
-        let w = ((x1 - ox) / res).ceil() as usize + 1;
-        let h = ((y1 - oy) / res).ceil() as usize + 1;
+        let (wf, hf) = ((x1 - ox) / res + 1.0, (y1 - oy) / res + 1.0);
+        if !(wf * hf <= max_cells as f64) {
+            if max_cells == MAX_CELLS && !self.full {
+                tracing::warn!(
+                    x_m = x,
+                    y_m = y,
+                    max_cells = MAX_CELLS,
+                    "obstacle memory full: places beyond it count as unknown"
+                );
+                self.full = true;
+            }
+            return;
+        }
+        let w = wf.ceil() as usize;
+        let h = hf.ceil() as usize;
         let dx = ((self.origin.0 - ox) / res).round() as usize;
         let dy = ((self.origin.1 - oy) / res).round() as usize;
         let mut hits = vec![0u16; w * h];
@@ -193,48 +231,93 @@ impl ObstacleMemory {
     }
 
     /// Computes the path-length field to `target` unless it is current; true when recomputed.
+    ///
+    /// The grid grows to hold the target while it stays within [`TARGET_CELLS`]; a target
+    /// beyond is reached through the unknown around the grid, which counts as free, so every
+    /// free cell just inside the grid's border is seeded with its straight-line distance to
+    /// the target.
     pub fn update_field(&mut self, target: WorldPoint) -> bool {
-        self.ensure_contains(target);
-        let Some(tc) = self.cell_of(target) else {
-            return false;
-        };
-        if self.field_key == Some((self.version, tc)) {
+        let (x, y) = (target.x_m(), target.y_m());
+        if !(x.is_finite() && y.is_finite()) {
             return false;
         }
-        let n = self.width * self.height;
+        self.grow_to(target, TARGET_CELLS);
+        if self.width < 3 || self.height < 3 {
+            return false;
+        }
+        let key_cell = (
+            ((x - self.origin.0) / self.resolution_m).floor() as i64,
+            ((y - self.origin.1) / self.resolution_m).floor() as i64,
+        );
+        if self.field_key == Some((self.version, key_cell)) {
+            return false;
+        }
         self.field.clear();
-        self.field.resize(n, UNREACHED);
+        self.field.resize(self.width * self.height, UNREACHED);
         for b in &mut self.buckets {
             b.clear();
         }
-        // Seed: the target cell, and when it is blocked (the target close to a wall) the free
-        // cells within the inflation radius of it, at their straight-line cost.
+        self.seeds.clear();
+        match self.cell_of(target) {
+            Some(tc) => self.seed_at_target(tc),
+            None => self.seed_border(x, y),
+        }
+        // Costliest first, so that the next due seed is the last one.
+        self.seeds.sort_unstable_by(|a, b| b.cmp(a));
+        for &(cost, k) in &self.seeds {
+            self.field[k as usize] = self.field[k as usize].min(cost);
+        }
+        self.wavefront();
+        self.field_key = Some((self.version, key_cell));
+        true
+    }
+
+    /// Seeds the target cell, and when it is blocked (the target close to a wall) the free
+    /// cells within the inflation radius of it, at their straight-line cost.
+    fn seed_at_target(&mut self, tc: usize) {
+        self.field_base_m = 0.0;
+        self.seeds.push((0, tc as u32));
+        if self.blocked[tc] == 0 {
+            return;
+        }
         let reach = (self.inflate_m / self.resolution_m).ceil() as i32 + 1;
         let (tcol, trow) = ((tc % self.width) as i32, (tc / self.width) as i32);
-        self.field[tc] = 0;
-        self.buckets[0].push(tc as u32);
-        if self.blocked[tc] > 0 {
-            for dy in -reach..=reach {
-                for dx in -reach..=reach {
-                    let (x, y) = (tcol + dx, trow + dy);
-                    if x < 0 || y < 0 || x as usize >= self.width || y as usize >= self.height {
-                        continue;
-                    }
-                    let k = y as usize * self.width + x as usize;
-                    if self.blocked[k] == 0 {
-                        let cost = (((dx * dx + dy * dy) as f64).sqrt() * STRAIGHT as f64) as u32;
-                        if cost < self.field[k] {
-                            self.field[k] = cost;
-                            let nb = self.buckets.len();
-                            self.buckets[cost as usize % nb].push(k as u32);
-                        }
-                    }
+        for dy in -reach..=reach {
+            for dx in -reach..=reach {
+                let (x, y) = (tcol + dx, trow + dy);
+                if x < 0 || y < 0 || x as usize >= self.width || y as usize >= self.height {
+                    continue;
+                }
+                let k = y as usize * self.width + x as usize;
+                if self.blocked[k] == 0 {
+                    let cost = (((dx * dx + dy * dy) as f64).sqrt() * STRAIGHT as f64) as u32;
+                    self.seeds.push((cost, k as u32));
                 }
             }
         }
-        self.wavefront();
-        self.field_key = Some((self.version, tc));
-        true
+    }
+
+    /// Seeds every free cell of the ring just inside the closed border with its straight-line
+    /// distance to the off-grid target `(x, y)`, relative to the nearest of them.
+    fn seed_border(&mut self, x: f64, y: f64) {
+        let (w, h) = (self.width, self.height);
+        let ring = (1..w - 1)
+            .flat_map(|c| [w + c, (h - 2) * w + c])
+            .chain((2..h - 2).flat_map(|r| [r * w + 1, r * w + w - 2]));
+        let mut dists = Vec::new();
+        for k in ring {
+            if self.blocked[k] == 0 {
+                let (cx, cy) = self.centre_of(k);
+                dists.push(((cx - x).hypot(cy - y), k));
+            }
+        }
+        let base = dists.iter().map(|d| d.0).fold(f64::INFINITY, f64::min);
+        self.field_base_m = if base.is_finite() { base } else { 0.0 };
+        let per_m = STRAIGHT as f64 / self.resolution_m;
+        for (d, k) in dists {
+            let cost = ((d - base) * per_m).round().min(f64::from(u32::MAX / 2)) as u32;
+            self.seeds.push((cost, k as u32));
+        }
     }
 
     /// Dial's shortest paths over free cells (8-connected, no corner cutting), from the
@@ -268,11 +351,29 @@ impl ObstacleMemory {
         let mut empty_run = 0;
         let mut popped = Vec::new();
         std::mem::swap(&mut popped, &mut self.popped);
-        while empty_run < nb {
+        loop {
+            while let Some(&(due, k)) = self.seeds.last() {
+                if due > cost {
+                    break;
+                }
+                self.seeds.pop();
+                if self.field[k as usize] == due {
+                    self.buckets[due as usize % nb].push(k);
+                }
+            }
             let slot = cost as usize % nb;
             if self.buckets[slot].is_empty() {
                 empty_run += 1;
-                cost += 1;
+                if empty_run >= nb {
+                    // Nothing in flight: jump to the next seed, or stop.
+                    let Some(&(due, _)) = self.seeds.last() else {
+                        break;
+                    };
+                    cost = due;
+                    empty_run = 0;
+                } else {
+                    cost += 1;
+                }
                 continue;
             }
             empty_run = 0;
@@ -332,13 +433,17 @@ impl ObstacleMemory {
     }
 
     /// Path length from `p` to the target of the last field, metres; `None` when no path is
-    /// known. A point in a blocked cell (right at the edge of an obstacle) takes the best free
+    /// known or the memory changed since the field was computed. A point in a blocked cell (right at the edge of an obstacle) takes the best free
     /// cell next to it plus the straight distance to that cell's centre.
     pub fn path_length_m(&self, p: WorldPoint) -> Option<f64> {
         let c = self.cell_of(p)?;
+        // A field computed before the grid last changed may not match its cells.
+        if self.field_key.map(|k| k.0) != Some(self.version) {
+            return None;
+        }
         let to_m = self.resolution_m / STRAIGHT as f64;
         if self.field[c] != UNREACHED && self.blocked[c] == 0 {
-            return Some(self.field[c] as f64 * to_m);
+            return Some(self.field_base_m + self.field[c] as f64 * to_m);
         }
         let (col, row) = ((c % self.width) as i64, (c / self.width) as i64);
         let mut best: Option<f64> = None;
@@ -352,7 +457,7 @@ impl ObstacleMemory {
                 if self.field[k] == UNREACHED {
                     continue;
                 }
-                let along = self.field[k] as f64 * to_m;
+                let along = self.field_base_m + self.field[k] as f64 * to_m;
                 // Adding a distance cannot bring it below the best so far.
                 if best.is_some_and(|b| along >= b) {
                     continue;
@@ -412,5 +517,46 @@ mod tests {
         m.update_field(WorldPoint::new(0.0, 0.0));
         assert!(m.path_length_m(WorldPoint::new(3.0, 0.0)).is_none());
         assert!(m.path_length_m(WorldPoint::new(0.5, 0.0)).is_some());
+    }
+
+    #[test]
+    fn off_grid_target_is_reached_through_the_unknown() {
+        let mut m = ObstacleMemory::new(0.1, 0.3);
+        m.add_hit(WorldPoint::new(1.0, 1.0));
+        let cells = m.cell_count();
+        // 5 km east (a grid holding it would need 2 million cells): the grid does not grow,
+        // and the path is the straight line (to within a cell for the ring cell's offset from
+        // the line).
+        assert!(m.update_field(WorldPoint::new(5000.0, 0.0)));
+        assert_eq!(m.cell_count(), cells);
+        let d = m.path_length_m(WorldPoint::new(0.05, 0.05)).unwrap();
+        assert!((d - 4999.95).abs() < 0.15, "{d}");
+        // A wall across the way east (x = 1.5, y from -1 to 2.5) forces a detour around its
+        // nearer end (at y = -1, inflated 0.3 m): at least sqrt(1.45^2 + 1.35^2) + the rest.
+        for i in 0..=70 {
+            m.add_hit(WorldPoint::new(1.5, -1.0 + i as f64 * 0.05));
+        }
+        m.update_field(WorldPoint::new(5000.0, 0.0));
+        let around = m.path_length_m(WorldPoint::new(0.05, 0.05)).unwrap();
+        assert!(around > d + 0.5, "{around} vs {d}");
+        // Any finite target, however far, leaves the grid as it is and gives a finite answer.
+        let cells = m.cell_count();
+        for far in [1e4, 1e12, 1e19, -1e300] {
+            m.update_field(WorldPoint::new(far, far));
+            assert_eq!(m.cell_count(), cells);
+            assert!(m.path_length_m(WorldPoint::new(0.05, 0.05)).is_some());
+        }
+        assert!(!m.update_field(WorldPoint::new(f64::NAN, 0.0)));
+    }
+
+    #[test]
+    fn grid_stops_growing_at_its_cell_budget() {
+        let mut m = ObstacleMemory::new(0.1, 0.3);
+        m.add_hit(WorldPoint::new(0.0, 0.0));
+        // 10 km away: the grid would need 10^10 cells.
+        m.add_hit(WorldPoint::new(10_000.0, 10_000.0));
+        assert!(m.cell_count() <= MAX_CELLS);
+        assert!(!m.is_blocked(WorldPoint::new(10_000.0, 10_000.0)));
+        assert!(m.is_blocked(WorldPoint::new(0.0, 0.0)));
     }
 }

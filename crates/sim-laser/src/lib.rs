@@ -42,6 +42,8 @@ pub use scenario::{SimSetup, file_scenario, paper_start, paper_target};
 pub use sensor::{
     DROPOUT_CODE, LaserNoise, SensorPreset, SigmaCombine, TOO_NEAR_CODE, cast_scan, true_scan,
 };
-pub use sim::{Collision, MotionNoise, SimBase, SimLaser, SimSpeeds, Simulation, TruthHandle};
+pub use sim::{
+    BaseGains, Collision, MotionNoise, SimBase, SimLaser, SimSpeeds, Simulation, TruthHandle,
+};
 pub use stage::stage_world_from_bytes;
 pub use world::{Bitmap, Obstacle, World, WorldParts};

@@ -39,6 +39,25 @@ impl MotionNoise {
     }
 }
 
+/// Systematic actuation faults of the simulated base: the share of each command it carries out.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BaseGains {
+    /// Share of each commanded drive driven (1: as commanded; 0: a stalled base; 0.5: 50 %
+    /// wheel slip).
+    pub drive: f64,
+    /// Share of each commanded rotation turned (0.8: turns 20 % short).
+    pub turn: f64,
+}
+
+impl Default for BaseGains {
+    fn default() -> Self {
+        Self {
+            drive: 1.0,
+            turn: 1.0,
+        }
+    }
+}
+
 /// One contact of the robot's disc with the world.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Collision {
@@ -79,6 +98,7 @@ struct State {
     geometry: ScanGeometry,
     laser_noise: LaserNoise,
     motion_noise: MotionNoise,
+    gains: BaseGains,
     radius_m: f64,
     speeds: SimSpeeds,
     pose: Pose2,
@@ -134,6 +154,7 @@ impl Simulation {
                 geometry: geometry.into(),
                 laser_noise,
                 motion_noise,
+                gains: BaseGains::default(),
                 radius_m: robot_radius_m.max(0.0),
                 speeds: SimSpeeds::default(),
                 pose: start,
@@ -168,6 +189,12 @@ impl Simulation {
         );
         s.state.speeds.scan_period_s = preset.scan_period_s();
         s
+    }
+
+    /// Makes the base carry out only a share of each command (a stall, slip, short turns).
+    pub fn with_base_gains(mut self, gains: BaseGains) -> Simulation {
+        self.state.gains = gains;
+        self
     }
 
     /// Replaces the clock speeds.
@@ -262,7 +289,7 @@ impl MotionBase for SimBase {
         } else {
             0.0
         };
-        let actual = angle_rad + err;
+        let actual = angle_rad * st.gains.turn + err;
         st.pose = st.pose.rotated(actual);
         st.rotations += 1;
         if st.speeds.angular_rad_s > 0.0 {
@@ -293,7 +320,7 @@ impl MotionBase for SimBase {
                 f
             }
         };
-        let target = distance_m * factor;
+        let target = distance_m * factor * st.gains.drive;
         let achieved = drive(&st.world, st.pose, st.radius_m, target);
         st.pose = st.pose.advanced(achieved);
         st.travelled_m += achieved.abs();

@@ -432,3 +432,36 @@ fn decoding_reuses_the_callers_buffers() {
         assert_eq!(raw.ranges_mm.as_ptr(), p, "no reallocation in steady state");
     }
 }
+
+#[test]
+fn polled_scans_come_at_the_sensor_period_on_the_real_clock() {
+    // A real sensor answers GD with its next scan: N polled scans take about N - 1 periods of
+    // wall time, their stamps are one period apart, and none lies ahead of the sensor's own
+    // clock (II TIME) read after them.
+    let emu = Emulator::fixed(Model::Urg04lx).real_time();
+    let cfg = UrgConfig {
+        time_sync_rounds: 3,
+        ..UrgConfig::default()
+    };
+    let mut urg = Urg::connect(emu, cfg).unwrap();
+    let period_ms = urg.params().scan_period().as_millis() as u64;
+    assert_eq!(period_ms, 100, "URG-04LX: 600 rpm");
+    let started = Instant::now();
+    let mut stamps = Vec::new();
+    for _ in 0..8 {
+        stamps.push(urg.next_scan().unwrap().sensor_time_ms.unwrap());
+    }
+    let elapsed = started.elapsed();
+    assert!(
+        elapsed >= Duration::from_millis(6 * period_ms),
+        "8 polled scans in {elapsed:?}"
+    );
+    for w in stamps.windows(2) {
+        assert_eq!(w[1] - w[0], period_ms, "{stamps:?}");
+    }
+    let time = u64::from(urg.state().unwrap().time_ms.unwrap());
+    assert!(
+        time >= *stamps.last().unwrap(),
+        "II TIME {time} < last stamp {stamps:?}"
+    );
+}

@@ -2,7 +2,7 @@
 
 use scan_types::LaserSource;
 
-use super::machine::{SensorCore, StreamJob};
+use super::machine::{GetJob, SensorCore, StreamJob};
 use crate::codec::{self, Command, DataKind, ScanRequest, Status, StreamRequest, TimeCode};
 
 impl<S: LaserSource> SensorCore<S> {
@@ -180,7 +180,7 @@ impl<S: LaserSource> SensorCore<S> {
         }
     }
 
-    /// GD/GS/GE: one scan, stamped with a fresh scan time.
+    /// GD/GS/GE: one scan, stamped with a fresh scan time and answered when that scan is done.
     fn get_command(&mut self, line: &[u8], req: ScanRequest, now_ms: u64) {
         let st = |s: &[u8; 2]| Status(*s);
         if let Some(s) = self.check_request(&req) {
@@ -190,8 +190,8 @@ impl<S: LaserSource> SensorCore<S> {
             return self.reply(line, st(b"10"));
         }
         let period = self.profile.params.scan_period().as_millis().max(1) as u64;
-        // Each GD takes a fresh scan from the source, so it gets a fresh scan time:
-        // the latest scan start, or the next one if that was already served.
+        // Each GD takes a fresh scan from the source, so it gets a fresh scan time: the latest
+        // scan start, or the next one if that was already served, which the reply waits for.
         let mut stamp = now_ms - now_ms % period;
         if let Some(last) = self.last_get_stamp_ms
             && stamp <= last
@@ -199,7 +199,15 @@ impl<S: LaserSource> SensorCore<S> {
             stamp = last + period;
         }
         self.last_get_stamp_ms = Some(stamp);
-        self.scan_reply(line, &req, Status::OK, stamp);
+        if stamp <= now_ms {
+            self.scan_reply(line, &req, Status::OK, stamp);
+        } else {
+            self.get = Some(GetJob {
+                echo: line.to_vec(),
+                req,
+                due_ms: stamp,
+            });
+        }
     }
 
     /// MD/MS/ME: starts streaming from the next scan start.

@@ -10,6 +10,14 @@ use super::control::Fault;
 use super::profile::Profile;
 use crate::codec::{LF, Status, StreamRequest, encode_info_line, encode_status_line};
 
+/// A single-scan request waiting for the scan it will be answered with.
+#[derive(Debug, Clone)]
+pub(super) struct GetJob {
+    pub(super) echo: Vec<u8>,
+    pub(super) req: crate::codec::ScanRequest,
+    pub(super) due_ms: u64,
+}
+
 #[derive(Debug, Clone)]
 pub(super) struct StreamJob {
     pub(super) req: StreamRequest,
@@ -33,6 +41,9 @@ pub struct SensorCore<S> {
     pub(super) timer_origin_ms: u64,
     pub(super) last_get_stamp_ms: Option<u64>,
     pub(super) stream: Option<StreamJob>,
+    pub(super) get: Option<GetJob>,
+    /// Bytes received while a single-scan request waits: read after its reply.
+    pub(super) held: Vec<u8>,
     pub(super) inbuf: Vec<u8>,
     pub(super) out: VecDeque<u8>,
 }
@@ -58,6 +69,8 @@ impl<S: LaserSource> SensorCore<S> {
             timer_origin_ms: 0,
             last_get_stamp_ms: None,
             stream: None,
+            get: None,
+            held: Vec::new(),
             inbuf: Vec::new(),
             out: VecDeque::new(),
         }
@@ -78,9 +91,12 @@ impl<S: LaserSource> SensorCore<S> {
         &self.control
     }
 
-    /// When the next streamed scan is due, if streaming.
+    /// When the next scan reply is due: a waiting single-scan request or the next streamed
+    /// scan.
     pub fn next_due_ms(&self) -> Option<u64> {
-        self.stream.as_ref().map(|s| s.next_due_ms)
+        let get = self.get.as_ref().map(|g| g.due_ms);
+        let stream = self.stream.as_ref().map(|s| s.next_due_ms);
+        get.into_iter().chain(stream).min()
     }
 
     /// Bytes waiting to be sent.
@@ -102,7 +118,13 @@ impl<S: LaserSource> SensorCore<S> {
         if self.control.lock().stalled {
             return;
         }
-        for &b in bytes {
+        for (k, &b) in bytes.iter().enumerate() {
+            if self.get.is_some() {
+                // A sensor reads its next command after answering the one it is busy with.
+                self.held.extend_from_slice(&bytes[k..]);
+                self.held.truncate(4096);
+                return;
+            }
             if b == b'\n' || b == b'\r' {
                 let line = std::mem::take(&mut self.inbuf);
                 if !line.is_empty() {
@@ -114,8 +136,18 @@ impl<S: LaserSource> SensorCore<S> {
         }
     }
 
-    /// Emits the streamed scan due at or before `now_ms`, if any; returns whether it did.
+    /// Emits the scan reply due at or before `now_ms`, if any; returns whether it did.
     pub fn poll(&mut self, now_ms: u64) -> bool {
+        if let Some(job) = &self.get
+            && job.due_ms <= now_ms
+            && !self.control.lock().stalled
+        {
+            let job = self.get.take().expect("checked above");
+            self.scan_reply(&job.echo, &job.req, Status::OK, job.due_ms);
+            let held = std::mem::take(&mut self.held);
+            self.feed(&held, now_ms);
+            return true;
+        }
         let Some(job) = &self.stream else {
             return false;
         };
