@@ -367,13 +367,15 @@ where
 }
 
 /// A `LaserSource` that survives unplugging: on `Disconnected` it reopens the port with
-/// backoff, checks the parameters are unchanged and resumes the stream.
+/// backoff, checks that it is the same sensor (serial number from `VV`) with unchanged
+/// parameters, and resumes the stream.
 pub struct ReconnectingUrg<T, F> {
     open: F,
     config: UrgConfig,
     backoff: Backoff,
     urg: Option<Urg<T>>,
     params: SensorParams,
+    serial: Option<String>,
     geometry: ScanGeometry,
     reconnects: u32,
 }
@@ -381,8 +383,10 @@ pub struct ReconnectingUrg<T, F> {
 impl<T: Read + Write, F: FnMut() -> io::Result<T>> ReconnectingUrg<T, F> {
     /// Opens and connects (with backoff).
     pub fn new(mut open: F, config: UrgConfig, backoff: Backoff) -> Result<Self, UrgError> {
-        let urg = connect_with_backoff(&mut open, &config, &backoff)?;
+        let mut urg = connect_with_backoff(&mut open, &config, &backoff)?;
+        let serial = serial_of(&mut urg);
         Ok(ReconnectingUrg {
+            serial,
             params: urg.params().clone(),
             geometry: *LaserSource::geometry(&urg),
             urg: Some(urg),
@@ -415,7 +419,15 @@ impl<T: Read + Write, F: FnMut() -> io::Result<T>> LaserSource for ReconnectingU
         loop {
             if self.urg.is_none() {
                 let started = Instant::now();
-                let urg = connect_with_backoff(&mut self.open, &self.config, &self.backoff)?;
+                let mut urg = connect_with_backoff(&mut self.open, &self.config, &self.backoff)?;
+                let serial = serial_of(&mut urg);
+                if serial != self.serial {
+                    return Err(UrgError::ParametersChanged(format!(
+                        "serial number {} became {}: a different sensor",
+                        self.serial.as_deref().unwrap_or("(none)"),
+                        serial.as_deref().unwrap_or("(none)")
+                    )));
+                }
                 if urg.params() != &self.params {
                     return Err(UrgError::ParametersChanged(format!(
                         "{:?} became {:?}",
@@ -439,6 +451,17 @@ impl<T: Read + Write, F: FnMut() -> io::Result<T>> LaserSource for ReconnectingU
     }
 }
 
+/// The sensor's serial number from `VV`, if it answers.
+fn serial_of<T: Read + Write>(urg: &mut Urg<T>) -> Option<String> {
+    match urg.version() {
+        Ok(v) => Some(v.serial),
+        Err(e) => {
+            tracing::warn!("VV not answered ({e}): the sensor's identity is not checked");
+            None
+        }
+    }
+}
+
 /// A serial port opened through the `serialport` crate.
 pub type SerialTransport = Box<dyn serialport::SerialPort>;
 
@@ -455,7 +478,12 @@ impl Urg<SerialTransport> {
     /// Opens the serial device at `path` and connects.
     pub fn open(path: &str, config: UrgConfig) -> Result<Self, UrgError> {
         let io = open_serial(path).map_err(|e| {
-            if crate::port::is_disconnect(&e) {
+            if e.kind() == io::ErrorKind::NotFound {
+                UrgError::NoSuchPort {
+                    path: path.to_string(),
+                    why: e.to_string(),
+                }
+            } else if crate::port::is_disconnect(&e) {
                 UrgError::Disconnected(format!("cannot open {path}: {e}"))
             } else {
                 UrgError::Io(std::io::Error::new(

@@ -84,6 +84,14 @@ pub enum UrgError {
     /// The device went away (USB unplugged, pseudo-terminal closed, end of stream).
     #[error("sensor disconnected: {0}")]
     Disconnected(String),
+    /// The serial device does not exist (wrong path, or the sensor is not plugged in).
+    #[error("no serial device at {path} ({why}); is the sensor plugged in? A USB Hokuyo appears as /dev/ttyACM0 or similar")]
+    NoSuchPort {
+        /// The path given.
+        path: String,
+        /// What the system said.
+        why: String,
+    },
     /// The reply grew beyond the receive buffer without an end.
     #[error("reply longer than {0} bytes without an end; buffer discarded")]
     Overflow(usize),

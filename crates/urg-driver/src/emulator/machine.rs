@@ -76,6 +76,23 @@ impl<S: LaserSource> SensorCore<S> {
         }
     }
 
+    /// Powers the sensor up afresh at `now_ms` (after it was unplugged): no stream, no pending
+    /// request, the timer from zero, the protocol of its power-up.
+    pub fn power_up(&mut self, now_ms: u64) {
+        self.scip1 = self.profile.scip1_at_power_up;
+        self.laser_on = true;
+        self.time_adjust = false;
+        self.motor_code = 0;
+        self.bit_rate = 19_200;
+        self.timer_origin_ms = now_ms;
+        self.last_get_stamp_ms = None;
+        self.stream = None;
+        self.get = None;
+        self.held.clear();
+        self.inbuf.clear();
+        self.out.clear();
+    }
+
     /// The sensor's 24-bit timer at `now_ms`.
     pub(super) fn timer(&self, now_ms: u64) -> u32 {
         (now_ms.wrapping_sub(self.timer_origin_ms) & 0xFF_FFFF) as u32
