@@ -57,4 +57,14 @@ pub enum SimError {
     /// An unknown sensor preset name.
     #[error("unknown sensor preset {0:?} (expected paper, urg-04lx or utm-30lx)")]
     UnknownPreset(String),
+    /// A start or target the robot cannot have in this world.
+    #[error("impossible scenario in world {world}: the {what} {message}")]
+    Scenario {
+        /// The world's name.
+        world: String,
+        /// `start` or `target`.
+        what: &'static str,
+        /// What is wrong with it.
+        message: String,
+    },
 }

@@ -114,12 +114,93 @@ impl SimSetup {
         }
     }
 
+    /// Checks that the robot can start at `start` and that `target` lies in the world's free
+    /// space, before the robot moves.
+    pub fn check_scenario(&self, target: WorldPoint) -> Result<(), SimError> {
+        let (lo, hi) = self.world.bounds();
+        let bad = |what, message: String| {
+            Err(SimError::Scenario {
+                world: self.world_name.clone(),
+                what,
+                message,
+            })
+        };
+        let inside = |p: WorldPoint| {
+            p.x_m() >= lo.x_m() && p.x_m() <= hi.x_m() && p.y_m() >= lo.y_m() && p.y_m() <= hi.y_m()
+        };
+        let bounds = format!(
+            "x {:.2}..{:.2} m, y {:.2}..{:.2} m",
+            lo.x_m(),
+            hi.x_m(),
+            lo.y_m(),
+            hi.y_m()
+        );
+        let s = self.start;
+        if !(s.x_m.is_finite() && s.y_m.is_finite() && s.theta_rad.is_finite()) {
+            return bad(
+                "start",
+                format!("({}, {}, {}) is not finite", s.x_m, s.y_m, s.theta_rad),
+            );
+        }
+        if !inside(s.position()) {
+            return bad(
+                "start",
+                format!(
+                    "({:.2}, {:.2}) lies outside the world ({bounds})",
+                    s.x_m, s.y_m
+                ),
+            );
+        }
+        if self.world.disc_collides(s.position(), self.robot_radius_m) {
+            return bad(
+                "start",
+                format!(
+                    "({:.2}, {:.2}) puts the robot (radius {} m) into an obstacle",
+                    s.x_m, s.y_m, self.robot_radius_m
+                ),
+            );
+        }
+        if !(target.x_m().is_finite() && target.y_m().is_finite()) {
+            return bad(
+                "target",
+                format!("({}, {}) is not finite", target.x_m(), target.y_m()),
+            );
+        }
+        if !inside(target) {
+            return bad(
+                "target",
+                format!(
+                    "({:.2}, {:.2}) lies outside the world ({bounds})",
+                    target.x_m(),
+                    target.y_m()
+                ),
+            );
+        }
+        if self.world.is_occupied(target) {
+            return bad(
+                "target",
+                format!(
+                    "({:.2}, {:.2}) lies inside an obstacle",
+                    target.x_m(),
+                    target.y_m()
+                ),
+            );
+        }
+        Ok(())
+    }
+
     /// Builds the simulation (the world is shared, not copied).
     pub fn build(&self) -> Result<Simulation, SimError> {
-        if !(self.robot_radius_m.is_finite() && self.robot_radius_m >= 0.0) {
+        if !(self.robot_radius_m.is_finite()
+            && self.robot_radius_m >= 0.0
+            && self.robot_radius_m <= 5.0)
+        {
             return Err(SimError::InvalidConfig {
                 field: "robot_radius_m",
-                message: format!("{} must be finite and >= 0", self.robot_radius_m),
+                message: format!(
+                    "{} must be finite, at least 0 and at most 5",
+                    self.robot_radius_m
+                ),
             });
         }
         let laser_noise = self.laser_noise();
@@ -163,5 +244,33 @@ mod tests {
         let (s, t) = file_scenario(Some(Path::new("/no/such.png"))).unwrap();
         assert_eq!((s, t), (paper_start(), paper_target()));
         assert!(file_scenario(Some(Path::new("/no/such.toml"))).is_err());
+    }
+
+    #[test]
+    fn impossible_scenarios_are_refused_before_the_robot_moves() {
+        let s = SimSetup::paper(0);
+        s.check_scenario(paper_target()).unwrap();
+        let e = s
+            .check_scenario(WorldPoint::new(1000.0, 1000.0))
+            .unwrap_err();
+        assert!(
+            e.to_string()
+                .contains("target (1000.00, 1000.00) lies outside"),
+            "{e}"
+        );
+        let e = s
+            .check_scenario(WorldPoint::new(f64::NAN, 0.0))
+            .unwrap_err();
+        assert!(e.to_string().contains("not finite"), "{e}");
+        // The first wall due east of the start: a robot centred on it overlaps it.
+        let start = paper_start();
+        let d = s.world.raycast(start.position(), 0.0, 20.0).unwrap();
+        let mut on_wall = SimSetup::paper(0);
+        on_wall.start = Pose2::new(start.x_m + d, start.y_m, 0.0);
+        let e = on_wall.check_scenario(paper_target()).unwrap_err();
+        assert!(e.to_string().contains("into an obstacle"), "{e}");
+        let mut outside = SimSetup::paper(0);
+        outside.start = Pose2::new(-500.0, 0.0, 0.0);
+        assert!(outside.check_scenario(paper_target()).is_err());
     }
 }

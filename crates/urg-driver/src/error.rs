@@ -85,7 +85,9 @@ pub enum UrgError {
     #[error("sensor disconnected: {0}")]
     Disconnected(String),
     /// The serial device does not exist (wrong path, or the sensor is not plugged in).
-    #[error("no serial device at {path} ({why}); is the sensor plugged in? A USB Hokuyo appears as /dev/ttyACM0 or similar")]
+    #[error(
+        "no serial device at {path} ({why}); is the sensor plugged in? A USB Hokuyo appears as /dev/ttyACM0 or similar"
+    )]
     NoSuchPort {
         /// The path given.
         path: String,

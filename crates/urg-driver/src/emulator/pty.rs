@@ -143,7 +143,9 @@ pub fn serve_pty_with<S: LaserSource + Send + 'static>(
                         std::thread::sleep(Duration::from_millis(5));
                         continue;
                     }
-                    (Some(p), false) => serve_once(&mut core, &mut p.master, &mut buf, &mut out, now()),
+                    (Some(p), false) => {
+                        serve_once(&mut core, &mut p.master, &mut buf, &mut out, now())
+                    }
                 }
             }
         })?;
