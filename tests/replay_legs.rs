@@ -11,8 +11,9 @@ use robot_app::cmd::scan::ScanFormat;
 use robot_app::cmd::sim::{SimSpec, record_run};
 use robot_app::outputs::Reason;
 use robot_app::record::{
-    LEGS_METADATA, LoggingBase, RUN_METADATA, Recorder, RunSettings, leg_summaries, replay_loop,
+    LEGS_METADATA, RUN_METADATA, Recorder, RunSettings, leg_summaries, replay_loop,
 };
+use robot_base::LoggingBase;
 use robot_app::runloop::run_loop;
 use scan_log::read_mcap;
 use scan_types::{Pose2, Scan};

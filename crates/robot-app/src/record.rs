@@ -9,7 +9,8 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Context;
 use scan_log::{GeometryOverride, LogSource, McapRecorder, RecordedLaser, RecordedTruth};
-use scan_types::{MotionBase, Pose2, Scan, ScanGeometry, WorldPoint};
+use robot_base::{Command, LoggingBase, NoMotion};
+use scan_types::{Pose2, Scan, ScanGeometry, WorldPoint};
 
 use crate::config::Params;
 use crate::outputs::RunLog;
@@ -265,68 +266,6 @@ impl Recorder {
             ("reason".to_string(), reason.to_string()),
         ]);
         self.write_metadata(LEGS_METADATA, &m)
-    }
-}
-
-/// A motion command the loop gave.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Command {
-    /// Rotate in place, radians.
-    Rotate(f64),
-    /// Drive straight, metres.
-    Forward(f64),
-    /// Stop.
-    Stop,
-}
-
-/// A motion base that records every command and passes it on to `inner`.
-pub struct LoggingBase<M> {
-    /// The base that executes the commands.
-    pub inner: M,
-    /// Every command, in order.
-    pub commands: Vec<Command>,
-}
-
-impl<M: MotionBase> LoggingBase<M> {
-    /// Wraps `inner`.
-    pub fn new(inner: M) -> Self {
-        Self {
-            inner,
-            commands: Vec::new(),
-        }
-    }
-}
-
-impl<M: MotionBase> MotionBase for LoggingBase<M> {
-    type Error = M::Error;
-    fn rotate(&mut self, angle_rad: f64) -> Result<(), Self::Error> {
-        self.commands.push(Command::Rotate(angle_rad));
-        self.inner.rotate(angle_rad)
-    }
-    fn forward(&mut self, distance_m: f64) -> Result<(), Self::Error> {
-        self.commands.push(Command::Forward(distance_m));
-        self.inner.forward(distance_m)
-    }
-    fn stop(&mut self) -> Result<(), Self::Error> {
-        self.commands.push(Command::Stop);
-        self.inner.stop()
-    }
-}
-
-/// A motion base that does nothing (a replay: the recorded scans already moved).
-#[derive(Debug, Default, Clone, Copy)]
-pub struct NoMotion;
-
-impl MotionBase for NoMotion {
-    type Error = std::convert::Infallible;
-    fn rotate(&mut self, _angle_rad: f64) -> Result<(), Self::Error> {
-        Ok(())
-    }
-    fn forward(&mut self, _distance_m: f64) -> Result<(), Self::Error> {
-        Ok(())
-    }
-    fn stop(&mut self) -> Result<(), Self::Error> {
-        Ok(())
     }
 }
 

@@ -7,7 +7,6 @@ use clap::Args;
 use scan_types::{LaserSource, Pose2, Scan};
 
 use super::sim::thread_cpu_time_s;
-use crate::base::open_base;
 use crate::outputs::{Reason, Summary};
 use crate::runloop::run_loop;
 
@@ -29,6 +28,17 @@ pub struct RunArgs {
     /// Configuration, output folder, recording.
     #[command(flatten)]
     pub options: super::LoopOptions,
+}
+
+/// Opens the base named by `--base SPEC` ([`robot_base::open_base`]).
+pub fn open_base(spec: &str) -> anyhow::Result<robot_base::DynBase> {
+    robot_base::open_base(spec).map_err(|e| {
+        let e = anyhow::Error::new(e);
+        match e.downcast_ref::<robot_base::BaseError>() {
+            Some(b) if b.is_spec_error() => anyhow::anyhow!("--base {e:#}"),
+            _ => e,
+        }
+    })
 }
 
 /// Runs `robot-app run`.
