@@ -13,8 +13,8 @@ use robot_app::outputs::Reason;
 use robot_app::record::{
     LEGS_METADATA, RUN_METADATA, Recorder, RunSettings, leg_summaries, replay_loop,
 };
-use robot_base::LoggingBase;
 use robot_app::runloop::run_loop;
+use robot_base::LoggingBase;
 use scan_log::read_mcap;
 use scan_types::{Pose2, Scan};
 

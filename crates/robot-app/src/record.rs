@@ -8,8 +8,8 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use anyhow::Context;
-use scan_log::{GeometryOverride, LogSource, McapRecorder, RecordedLaser, RecordedTruth};
 use robot_base::{Command, LoggingBase, NoMotion};
+use scan_log::{GeometryOverride, LogSource, McapRecorder, RecordedLaser, RecordedTruth};
 use scan_types::{Pose2, Scan, ScanGeometry, WorldPoint};
 
 use crate::config::Params;

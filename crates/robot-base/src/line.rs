@@ -188,5 +188,4 @@ mod tests {
         assert!((heading - std::f64::consts::PI).abs() < 1e-6);
         assert!((x + 1.5).abs() < 1e-4);
     }
-
 }
