@@ -24,7 +24,7 @@ fn register_font() {
 }
 
 /// Pixel size of the figures.
-const SIZE: (u32, u32) = (900, 900);
+pub const SIZE: (u32, u32) = (900, 900);
 
 /// Renders the run as PNG bytes.
 pub fn render_png(log: &RunLog, title: &str) -> anyhow::Result<Vec<u8>> {
@@ -246,138 +246,24 @@ fn draw<DB: DrawingBackend>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::outputs::LegRecord;
+    use crate::outputs::{LegRecord, RunLog};
     use scan_types::{Pose2, WorldPoint};
-
-    fn log() -> RunLog {
-        let mut legs = Vec::new();
-        for i in 0..4 {
-            let f = i as f64;
-            legs.push(LegRecord {
-                leg: i,
-                estimate: Pose2::new(f, f, 0.5),
-                truth: Some(Pose2::new(f + 0.05, f, 0.5)),
-                landmark: Some(WorldPoint::new(f + 0.5, f - 0.5)),
-                point_b: Some(WorldPoint::new(f + 0.4, f + 0.4)),
-                scan_points: (0..100)
-                    .map(|k| WorldPoint::new(-1.0 + k as f64 * 0.05, 4.0))
-                    .collect(),
-            });
-        }
-        RunLog {
-            goal: Some(WorldPoint::new(3.5, 3.5)),
-            legs,
-        }
-    }
-
-    #[test]
-    fn png_is_a_png_of_the_right_size_with_ink() {
-        let png = render_png(&log(), "test run").unwrap();
-        let img = image::load_from_memory(&png).unwrap().to_rgb8();
-        assert_eq!(img.dimensions(), SIZE);
-        // Some pixels are pure blue (the estimated path) and most are white.
-        let blue = img.pixels().filter(|p| p.0 == [0, 0, 255]).count();
-        let white = img.pixels().filter(|p| p.0 == [255, 255, 255]).count();
-        assert!(blue > 50, "blue pixels: {blue}");
-        assert!(white > (SIZE.0 * SIZE.1 / 2) as usize);
-    }
-
-    #[test]
-    fn svg_has_legend_and_axes() {
-        let svg = render_svg(&log(), "test run").unwrap();
-        for label in [
-            "estimated path",
-            "true path",
-            "point B",
-            "target",
-            "x (m)",
-            "y (m)",
-        ] {
-            assert!(svg.contains(label), "missing {label}");
-        }
-    }
-
-    #[test]
-    fn a_path_that_turns_back_draws_no_spike() {
-        // True positions of the last 31 legs of a run that went back and forth in a dead end
-        // (generated world 9, pair 2): as one wide polyline, a join drew a line off the chart.
-        const TRUE: [(f64, f64); 31] = [
-            (-7.254, -1.541),
-            (-7.484, -1.393),
-            (-7.434, -1.8),
-            (-7.409, -1.322),
-            (-7.164, -1.48),
-            (-7.22, -1.519),
-            (-7.471, -1.703),
-            (-7.267, -1.555),
-            (-7.473, -1.391),
-            (-7.442, -1.786),
-            (-7.415, -1.325),
-            (-7.171, -1.482),
-            (-7.467, -1.654),
-            (-7.47, -1.426),
-            (-7.238, -1.55),
-            (-7.479, -1.72),
-            (-7.278, -1.568),
-            (-7.474, -1.365),
-            (-7.446, -1.797),
-            (-7.43, -1.32),
-            (-7.185, -1.482),
-            (-7.475, -1.678),
-            (-7.221, -1.513),
-            (-7.467, -1.398),
-            (-7.439, -1.807),
-            (-7.399, -1.318),
-            (-7.155, -1.491),
-            (-7.466, -1.624),
-            (-7.424, -1.315),
-            (-7.18, -1.488),
-            (-7.476, -1.644),
-        ];
-        // The estimate is drawn 1 m north of the truth: the same shape, whose ink gives the
-        // size the red ink must have.
-        let legs = TRUE
-            .iter()
-            .enumerate()
-            .map(|(k, &(x, y))| LegRecord {
-                leg: k,
-                estimate: Pose2::new(x, y + 1.0, 0.0),
-                truth: Some(Pose2::new(x, y, 0.0)),
-                landmark: None,
-                point_b: None,
-                scan_points: Vec::new(),
-            })
-            .collect();
-        let log = RunLog { goal: None, legs };
-        let png = render_png(&log, "reversals").unwrap();
-        let img = image::load_from_memory(&png).unwrap().to_rgb8();
-        // Width and height of the ink of colour `c`, outside the legend's box (top left).
-        let extent = |c: [u8; 3]| {
-            let (mut x0, mut x1, mut y0, mut y1) = (u32::MAX, 0, u32::MAX, 0);
-            for (x, y, p) in img.enumerate_pixels() {
-                if p.0 == c && !(x < 360 && y < 180) {
-                    (x0, x1, y0, y1) = (x0.min(x), x1.max(x), y0.min(y), y1.max(y));
-                }
-            }
-            assert!(x0 <= x1, "no ink of {c:?}");
-            (x1 - x0, y1 - y0)
-        };
-        let (blue, red) = (extent([0, 0, 255]), extent([255, 0, 0]));
-        // The blue path carries 3-pixel dots at its points; the red one does not.
-        assert!(
-            red.0 <= blue.0 + 2 && red.1 <= blue.1 + 2 && red.0 + 12 >= blue.0,
-            "red ink {red:?} against blue {blue:?} (pixels)"
-        );
-    }
-
-    #[test]
-    fn empty_log_still_draws() {
-        assert!(render_png(&RunLog::default(), "empty").is_ok());
-    }
 
     #[test]
     fn bounds_are_square_and_hold_everything() {
-        let (x0, x1, y0, y1) = bounds(&log());
+        let leg = LegRecord {
+            leg: 0,
+            estimate: Pose2::new(0.0, 0.0, 0.5),
+            truth: Some(Pose2::new(3.55, 3.0, 0.5)),
+            landmark: None,
+            point_b: None,
+            scan_points: vec![WorldPoint::new(-1.0, 4.0), WorldPoint::new(2.0, -0.5)],
+        };
+        let log = RunLog {
+            goal: Some(WorldPoint::new(3.5, 3.5)),
+            legs: vec![leg],
+        };
+        let (x0, x1, y0, y1) = bounds(&log);
         assert!((x1 - x0 - (y1 - y0)).abs() < 1e-12);
         assert!(x0 <= -1.0 && x1 >= 3.55 && y0 <= -0.5 && y1 >= 4.0);
     }
