@@ -6,6 +6,7 @@ use std::sync::Once;
 
 use anyhow::{Context, anyhow};
 use plotters::coord::Shift;
+use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
 use plotters::style::FontStyle;
 
@@ -125,6 +126,9 @@ fn segments(points: &[(f64, f64)], style: ShapeStyle) -> Vec<PathElement<(f64, f
         .collect()
 }
 
+/// The chart of the figure: world coordinates on both axes.
+type Chart<'a, DB> = ChartContext<'a, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>;
+
 fn draw<DB: DrawingBackend>(
     root: &DrawingArea<DB, Shift>,
     log: &RunLog,
@@ -148,15 +152,32 @@ fn draw<DB: DrawingBackend>(
         .light_line_style(RGBColor(235, 235, 235))
         .draw()
         .map_err(err)?;
+    draw_scans_and_paths(&mut chart, log).map_err(err)?;
+    draw_legs(&mut chart, log).map_err(err)?;
+    draw_ends(&mut chart, log).map_err(err)?;
+    chart
+        .configure_series_labels()
+        .label_font((FAMILY, 14))
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .position(SeriesLabelPosition::UpperLeft)
+        .draw()
+        .map_err(err)?;
+    Ok(())
+}
 
+/// The scan hits, the true path (where known) and the estimated path with its leg ends.
+fn draw_scans_and_paths<DB: DrawingBackend>(
+    chart: &mut Chart<'_, DB>,
+    log: &RunLog,
+) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
     let scan_colour = RGBColor(150, 150, 150);
     chart
         .draw_series(
             thinned_scan_points(log)
                 .into_iter()
                 .map(|p| Circle::new(p, 1, scan_colour.filled())),
-        )
-        .map_err(err)?
+        )?
         .label("scans (world frame, estimated pose)")
         .legend(move |(x, y)| Circle::new((x + 8, y), 3, scan_colour.filled()));
 
@@ -167,8 +188,7 @@ fn draw<DB: DrawingBackend>(
         .collect();
     if !truth.is_empty() {
         chart
-            .draw_series(segments(&truth, RED.stroke_width(2)))
-            .map_err(err)?
+            .draw_series(segments(&truth, RED.stroke_width(2)))?
             .label("true path")
             .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], RED.stroke_width(2)));
     }
@@ -178,14 +198,18 @@ fn draw<DB: DrawingBackend>(
         .map(|r| (r.estimate.x_m, r.estimate.y_m))
         .collect();
     chart
-        .draw_series(segments(&est, BLUE.stroke_width(2)))
-        .map_err(err)?
+        .draw_series(segments(&est, BLUE.stroke_width(2)))?
         .label("estimated path")
         .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], BLUE.stroke_width(2)));
-    chart
-        .draw_series(est.iter().map(|&p| Circle::new(p, 3, BLUE.filled())))
-        .map_err(err)?;
+    chart.draw_series(est.iter().map(|&p| Circle::new(p, 3, BLUE.filled())))?;
+    Ok(())
+}
 
+/// Each leg's landmark and point B.
+fn draw_legs<DB: DrawingBackend>(
+    chart: &mut Chart<'_, DB>,
+    log: &RunLog,
+) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
     let green = RGBColor(0, 150, 0);
     chart
         .draw_series(
@@ -193,8 +217,7 @@ fn draw<DB: DrawingBackend>(
                 .iter()
                 .filter_map(|r| r.landmark)
                 .map(|p| TriangleMarker::new((p.x_m(), p.y_m()), 6, green.filled())),
-        )
-        .map_err(err)?
+        )?
         .label("landmark of each leg")
         .legend(move |(x, y)| TriangleMarker::new((x + 8, y), 6, green.filled()));
     chart
@@ -203,11 +226,17 @@ fn draw<DB: DrawingBackend>(
                 .iter()
                 .filter_map(|r| r.point_b)
                 .map(|p| Cross::new((p.x_m(), p.y_m()), 5, MAGENTA.stroke_width(2))),
-        )
-        .map_err(err)?
+        )?
         .label("point B of each leg")
         .legend(|(x, y)| Cross::new((x + 8, y), 5, MAGENTA.stroke_width(2)));
+    Ok(())
+}
 
+/// The start (its true pose where known) and the target.
+fn draw_ends<DB: DrawingBackend>(
+    chart: &mut Chart<'_, DB>,
+    log: &RunLog,
+) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
     if let Some(s) = log.legs.first() {
         let p = s.truth.unwrap_or(s.estimate);
         chart
@@ -215,8 +244,7 @@ fn draw<DB: DrawingBackend>(
                 (p.x_m, p.y_m),
                 7,
                 BLACK.filled(),
-            )))
-            .map_err(err)?
+            )))?
             .label("start")
             .legend(|(x, y)| Circle::new((x + 8, y), 5, BLACK.filled()));
     }
@@ -227,19 +255,10 @@ fn draw<DB: DrawingBackend>(
                 (g.x_m(), g.y_m()),
                 9,
                 orange.stroke_width(3),
-            )))
-            .map_err(err)?
+            )))?
             .label("target")
             .legend(move |(x, y)| Cross::new((x + 8, y), 6, orange.stroke_width(3)));
     }
-    chart
-        .configure_series_labels()
-        .label_font((FAMILY, 14))
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK)
-        .position(SeriesLabelPosition::UpperLeft)
-        .draw()
-        .map_err(err)?;
     Ok(())
 }
 
