@@ -27,4 +27,4 @@ pub use adaptors::{Command, LoggingBase, NoMotion};
 pub use error::BaseError;
 pub use line::{LineBase, forward_line, rotate_line};
 pub use manual::ManualBase;
-pub use open::{BaseSpec, DynBase, open_base};
+pub use open::{BaseSpec, DEFAULT_BAUD, DynBase, open_base};
