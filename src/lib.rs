@@ -8,6 +8,7 @@ pub use landmarks;
 pub use localiser;
 pub use navigator;
 pub use planner;
+pub use robot_base;
 pub use scan_log;
 pub use scan_types;
 pub use sim_laser;

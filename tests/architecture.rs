@@ -12,6 +12,7 @@ fn allowed() -> BTreeMap<&'static str, BTreeSet<&'static str>> {
     let all = [
         "scan-types",
         "urg-driver",
+        "robot-base",
         "sim-laser",
         "scan-log",
         "expansion",
@@ -33,8 +34,9 @@ fn allowed() -> BTreeMap<&'static str, BTreeSet<&'static str>> {
     let table: &[(&str, &[&str])] = &[
         // Layer 0.
         ("scan-types", &[]),
-        // Layer 1: sources and the kernel, on scan-types only.
+        // Layer 1: sources, bases and the kernel, on scan-types only.
         ("urg-driver", BOTTOM),
+        ("robot-base", BOTTOM),
         ("sim-laser", BOTTOM),
         ("scan-log", BOTTOM),
         ("expansion", BOTTOM),
@@ -152,6 +154,7 @@ fn the_navigator_pulls_in_no_program_crate() {
     for banned in [
         "sim-laser",
         "urg-driver",
+        "robot-base",
         "scan-log",
         "robot-app",
         "clap",

@@ -10,11 +10,10 @@ use robot_app::cmd::replay::{ReplayArgs, run_to};
 use robot_app::cmd::scan::ScanFormat;
 use robot_app::cmd::sim::{SimSpec, record_run};
 use robot_app::outputs::Reason;
-use robot_app::record::{
-    LEGS_METADATA, LoggingBase, RUN_METADATA, Recorder, RunSettings, leg_summaries, replay_loop,
-};
+use robot_app::record::{Recorder, RunSettings, leg_summaries, replay_loop};
 use robot_app::runloop::run_loop;
-use scan_log::read_mcap;
+use robot_base::LoggingBase;
+use scan_log::{LEGS_METADATA, RUN_METADATA, read_mcap};
 use scan_types::{Pose2, Scan};
 
 fn paper_spec() -> SimSpec {

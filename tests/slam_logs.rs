@@ -6,8 +6,9 @@ use std::io::BufRead;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use robot_app::cmd::slam::{SlamRun, load_params, run_log, write_outputs};
+use robot_app::cmd::slam::{load_params, run_log, write_outputs};
 use robot_app::outputs::tum;
+use slam::SlamRun;
 
 fn shared(rel: &str) -> Option<PathBuf> {
     let p = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/data/")).join(rel);

@@ -25,6 +25,7 @@
 mod error;
 mod grid;
 mod io;
+mod mapping;
 mod pointmap;
 mod rotation;
 mod scanmatch;
@@ -33,6 +34,7 @@ mod triangle;
 pub use error::LocaliserError;
 pub use grid::{CellState, GridParams, MapServerFiles, OccupancyGrid, pixel};
 pub use io::write_atomic;
+pub use mapping::{MapStats, build_map};
 pub use pointmap::{MapScan, PointMap};
 pub use rotation::{
     HeadingRule, RotationEstimate, RotationParams, heading_after_rotation, measure_rotation,

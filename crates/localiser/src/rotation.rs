@@ -305,31 +305,7 @@ pub fn measure_rotation_with(
     };
     let eval = |s: f64| eval_below(s, f64::INFINITY);
     // Integer search: every shift ranked on every second ray, the best three on all rays.
-    // Shifts are scored outward from the commanded one, and a shift is given up once its
-    // sum shows it worse than three scored ones whatever its remaining rays add (its mean
-    // is at least the sum over the most rays it could count; 1e-12 covers rounding).
-    let base = centre.round() as i64;
-    let most = a.len().div_ceil(2) as f64;
-    let mut ranked: Vec<(f64, i64)> = (-half..=half).map(|k| (f64::INFINITY, base + k)).collect();
-    let mut top3 = [f64::INFINITY; 3];
-    for t in 0..ranked.len() {
-        // 0, -1, +1, -2, +2, ... from the middle entry.
-        let off = (t as i64 + 1) / 2 * if t % 2 == 1 { -1 } else { 1 };
-        let idx = (half + off) as usize;
-        let limit = top3[2] * most * (1.0 + 1e-12);
-        let (c, pairs) = cost(&whole, &a, ranked[idx].1 as f64, clip, inc, 2, limit);
-        let c = if 2 * pairs >= params.min_pairs {
-            c
-        } else {
-            f64::INFINITY
-        };
-        ranked[idx].0 = c;
-        if c < top3[2] {
-            top3[2] = c;
-            top3.sort_by(f64::total_cmp);
-        }
-    }
-    ranked.sort_by(|x, y| x.0.total_cmp(&y.0));
+    let ranked = rank_integer_shifts(&whole, &a, centre.round() as i64, half, clip, inc, params);
     let mut best = (f64::INFINITY, 0i64);
     for &(_, shift) in ranked.iter().take(3).filter(|r| r.0.is_finite()) {
         let (c, _) = eval_below(shift as f64, best.0);
@@ -348,15 +324,79 @@ pub fn measure_rotation_with(
     if side.is_finite() && side < bar {
         return None;
     }
-    // Sub-ray refinement: a 0.25-ray grid within +-1 ray, a 0.05-ray grid within +-0.25 ray
-    // of its best, then a parabola through the best fine point and its grid neighbours.
+    let (s, fine) = refine_sub_ray(s0, best.0, &eval_below);
+    let (c, pairs) = eval(s);
+    let (c, pairs) = if c.is_finite() {
+        (c, pairs)
+    } else {
+        (fine.0, eval(fine.1).1)
+    };
+    let rms = c.sqrt();
+    if rms > params.max_rms_m {
+        return None;
+    }
+    Some(RotationEstimate {
+        angle_rad: normalize_angle_rad(s * inc),
+        rms_m: rms,
+        pairs,
+    })
+}
+
+/// Every integer shift within `half` rays of `base`, ranked best first on every second ray.
+///
+/// Shifts are scored outward from `base`, and a shift is given up once its sum shows it worse
+/// than three scored ones whatever its remaining rays add (its mean is at least the sum over
+/// the most rays it could count; 1e-12 covers rounding).
+fn rank_integer_shifts(
+    whole: &[Pair],
+    a: &[Option<Reading>],
+    base: i64,
+    half: i64,
+    clip: f64,
+    inc: f64,
+    params: &RotationParams,
+) -> Vec<(f64, i64)> {
+    let most = a.len().div_ceil(2) as f64;
+    let mut ranked: Vec<(f64, i64)> = (-half..=half).map(|k| (f64::INFINITY, base + k)).collect();
+    let mut top3 = [f64::INFINITY; 3];
+    for t in 0..ranked.len() {
+        // 0, -1, +1, -2, +2, ... from the middle entry.
+        let off = (t as i64 + 1) / 2 * if t % 2 == 1 { -1 } else { 1 };
+        let idx = (half + off) as usize;
+        let limit = top3[2] * most * (1.0 + 1e-12);
+        let (c, pairs) = cost(whole, a, ranked[idx].1 as f64, clip, inc, 2, limit);
+        let c = if 2 * pairs >= params.min_pairs {
+            c
+        } else {
+            f64::INFINITY
+        };
+        ranked[idx].0 = c;
+        if c < top3[2] {
+            top3[2] = c;
+            top3.sort_by(f64::total_cmp);
+        }
+    }
+    ranked.sort_by(|x, y| x.0.total_cmp(&y.0));
+    ranked
+}
+
+/// Sub-ray refinement around the integer best `s0` (cost `best_cost`): a 0.25-ray grid within
+/// +-1 ray, a 0.05-ray grid within +-0.25 ray of its best, then a parabola through the best
+/// fine point and its grid neighbours. Returns the refined shift and the best fine point
+/// (cost, shift). `eval_below(s, above)` is the cost at `s`, infinite once above `above`.
+fn refine_sub_ray(
+    s0: f64,
+    best_cost: f64,
+    eval_below: &impl Fn(f64, f64) -> (f64, usize),
+) -> (f64, (f64, f64)) {
+    let eval = |s: f64| eval_below(s, f64::INFINITY);
     let coarse_step = 0.25;
     let mut coarse = (f64::INFINITY, s0);
     for k in -4..=4 {
         let s = s0 + k as f64 * coarse_step;
         // The middle point is the integer best, already scored.
         let c = if k == 0 {
-            best.0
+            best_cost
         } else {
             eval_below(s, coarse.0).0
         };
@@ -392,21 +432,7 @@ pub fn measure_rotation_with(
     if cm.is_finite() && cp.is_finite() && den > 1e-15 {
         s += (0.5 * step * (cm - cp) / den).clamp(-0.5 * step, 0.5 * step);
     }
-    let (c, pairs) = eval(s);
-    let (c, pairs) = if c.is_finite() {
-        (c, pairs)
-    } else {
-        (fine.0, eval(fine.1).1)
-    };
-    let rms = c.sqrt();
-    if rms > params.max_rms_m {
-        return None;
-    }
-    Some(RotationEstimate {
-        angle_rad: normalize_angle_rad(s * inc),
-        rms_m: rms,
-        pairs,
-    })
+    (s, fine)
 }
 
 #[cfg(test)]

@@ -1,6 +1,5 @@
 //! The goalseek program as a library: the goal-seeking loop and the commands of `robot-app`.
 
-pub mod base;
 pub mod cmd;
 pub mod config;
 pub mod logging;

@@ -6,6 +6,7 @@ use std::sync::Once;
 
 use anyhow::{Context, anyhow};
 use plotters::coord::Shift;
+use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
 use plotters::style::FontStyle;
 
@@ -24,7 +25,7 @@ fn register_font() {
 }
 
 /// Pixel size of the figures.
-const SIZE: (u32, u32) = (900, 900);
+pub const SIZE: (u32, u32) = (900, 900);
 
 /// Renders the run as PNG bytes.
 pub fn render_png(log: &RunLog, title: &str) -> anyhow::Result<Vec<u8>> {
@@ -125,6 +126,9 @@ fn segments(points: &[(f64, f64)], style: ShapeStyle) -> Vec<PathElement<(f64, f
         .collect()
 }
 
+/// The chart of the figure: world coordinates on both axes.
+type Chart<'a, DB> = ChartContext<'a, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>;
+
 fn draw<DB: DrawingBackend>(
     root: &DrawingArea<DB, Shift>,
     log: &RunLog,
@@ -148,90 +152,9 @@ fn draw<DB: DrawingBackend>(
         .light_line_style(RGBColor(235, 235, 235))
         .draw()
         .map_err(err)?;
-
-    let scan_colour = RGBColor(150, 150, 150);
-    chart
-        .draw_series(
-            thinned_scan_points(log)
-                .into_iter()
-                .map(|p| Circle::new(p, 1, scan_colour.filled())),
-        )
-        .map_err(err)?
-        .label("scans (world frame, estimated pose)")
-        .legend(move |(x, y)| Circle::new((x + 8, y), 3, scan_colour.filled()));
-
-    let truth: Vec<(f64, f64)> = log
-        .legs
-        .iter()
-        .filter_map(|r| r.truth.map(|t| (t.x_m, t.y_m)))
-        .collect();
-    if !truth.is_empty() {
-        chart
-            .draw_series(segments(&truth, RED.stroke_width(2)))
-            .map_err(err)?
-            .label("true path")
-            .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], RED.stroke_width(2)));
-    }
-    let est: Vec<(f64, f64)> = log
-        .legs
-        .iter()
-        .map(|r| (r.estimate.x_m, r.estimate.y_m))
-        .collect();
-    chart
-        .draw_series(segments(&est, BLUE.stroke_width(2)))
-        .map_err(err)?
-        .label("estimated path")
-        .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], BLUE.stroke_width(2)));
-    chart
-        .draw_series(est.iter().map(|&p| Circle::new(p, 3, BLUE.filled())))
-        .map_err(err)?;
-
-    let green = RGBColor(0, 150, 0);
-    chart
-        .draw_series(
-            log.legs
-                .iter()
-                .filter_map(|r| r.landmark)
-                .map(|p| TriangleMarker::new((p.x_m(), p.y_m()), 6, green.filled())),
-        )
-        .map_err(err)?
-        .label("landmark of each leg")
-        .legend(move |(x, y)| TriangleMarker::new((x + 8, y), 6, green.filled()));
-    chart
-        .draw_series(
-            log.legs
-                .iter()
-                .filter_map(|r| r.point_b)
-                .map(|p| Cross::new((p.x_m(), p.y_m()), 5, MAGENTA.stroke_width(2))),
-        )
-        .map_err(err)?
-        .label("point B of each leg")
-        .legend(|(x, y)| Cross::new((x + 8, y), 5, MAGENTA.stroke_width(2)));
-
-    if let Some(s) = log.legs.first() {
-        let p = s.truth.unwrap_or(s.estimate);
-        chart
-            .draw_series(std::iter::once(Circle::new(
-                (p.x_m, p.y_m),
-                7,
-                BLACK.filled(),
-            )))
-            .map_err(err)?
-            .label("start")
-            .legend(|(x, y)| Circle::new((x + 8, y), 5, BLACK.filled()));
-    }
-    if let Some(g) = log.goal {
-        let orange = RGBColor(230, 120, 0);
-        chart
-            .draw_series(std::iter::once(Cross::new(
-                (g.x_m(), g.y_m()),
-                9,
-                orange.stroke_width(3),
-            )))
-            .map_err(err)?
-            .label("target")
-            .legend(move |(x, y)| Cross::new((x + 8, y), 6, orange.stroke_width(3)));
-    }
+    draw_scans_and_paths(&mut chart, log).map_err(err)?;
+    draw_legs(&mut chart, log).map_err(err)?;
+    draw_ends(&mut chart, log).map_err(err)?;
     chart
         .configure_series_labels()
         .label_font((FAMILY, 14))
@@ -243,141 +166,123 @@ fn draw<DB: DrawingBackend>(
     Ok(())
 }
 
+/// The scan hits, the true path (where known) and the estimated path with its leg ends.
+fn draw_scans_and_paths<DB: DrawingBackend>(
+    chart: &mut Chart<'_, DB>,
+    log: &RunLog,
+) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+    let scan_colour = RGBColor(150, 150, 150);
+    chart
+        .draw_series(
+            thinned_scan_points(log)
+                .into_iter()
+                .map(|p| Circle::new(p, 1, scan_colour.filled())),
+        )?
+        .label("scans (world frame, estimated pose)")
+        .legend(move |(x, y)| Circle::new((x + 8, y), 3, scan_colour.filled()));
+
+    let truth: Vec<(f64, f64)> = log
+        .legs
+        .iter()
+        .filter_map(|r| r.truth.map(|t| (t.x_m, t.y_m)))
+        .collect();
+    if !truth.is_empty() {
+        chart
+            .draw_series(segments(&truth, RED.stroke_width(2)))?
+            .label("true path")
+            .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], RED.stroke_width(2)));
+    }
+    let est: Vec<(f64, f64)> = log
+        .legs
+        .iter()
+        .map(|r| (r.estimate.x_m, r.estimate.y_m))
+        .collect();
+    chart
+        .draw_series(segments(&est, BLUE.stroke_width(2)))?
+        .label("estimated path")
+        .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], BLUE.stroke_width(2)));
+    chart.draw_series(est.iter().map(|&p| Circle::new(p, 3, BLUE.filled())))?;
+    Ok(())
+}
+
+/// Each leg's landmark and point B.
+fn draw_legs<DB: DrawingBackend>(
+    chart: &mut Chart<'_, DB>,
+    log: &RunLog,
+) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+    let green = RGBColor(0, 150, 0);
+    chart
+        .draw_series(
+            log.legs
+                .iter()
+                .filter_map(|r| r.landmark)
+                .map(|p| TriangleMarker::new((p.x_m(), p.y_m()), 6, green.filled())),
+        )?
+        .label("landmark of each leg")
+        .legend(move |(x, y)| TriangleMarker::new((x + 8, y), 6, green.filled()));
+    chart
+        .draw_series(
+            log.legs
+                .iter()
+                .filter_map(|r| r.point_b)
+                .map(|p| Cross::new((p.x_m(), p.y_m()), 5, MAGENTA.stroke_width(2))),
+        )?
+        .label("point B of each leg")
+        .legend(|(x, y)| Cross::new((x + 8, y), 5, MAGENTA.stroke_width(2)));
+    Ok(())
+}
+
+/// The start (its true pose where known) and the target.
+fn draw_ends<DB: DrawingBackend>(
+    chart: &mut Chart<'_, DB>,
+    log: &RunLog,
+) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+    if let Some(s) = log.legs.first() {
+        let p = s.truth.unwrap_or(s.estimate);
+        chart
+            .draw_series(std::iter::once(Circle::new(
+                (p.x_m, p.y_m),
+                7,
+                BLACK.filled(),
+            )))?
+            .label("start")
+            .legend(|(x, y)| Circle::new((x + 8, y), 5, BLACK.filled()));
+    }
+    if let Some(g) = log.goal {
+        let orange = RGBColor(230, 120, 0);
+        chart
+            .draw_series(std::iter::once(Cross::new(
+                (g.x_m(), g.y_m()),
+                9,
+                orange.stroke_width(3),
+            )))?
+            .label("target")
+            .legend(move |(x, y)| Cross::new((x + 8, y), 6, orange.stroke_width(3)));
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::outputs::LegRecord;
+    use crate::outputs::{LegRecord, RunLog};
     use scan_types::{Pose2, WorldPoint};
-
-    fn log() -> RunLog {
-        let mut legs = Vec::new();
-        for i in 0..4 {
-            let f = i as f64;
-            legs.push(LegRecord {
-                leg: i,
-                estimate: Pose2::new(f, f, 0.5),
-                truth: Some(Pose2::new(f + 0.05, f, 0.5)),
-                landmark: Some(WorldPoint::new(f + 0.5, f - 0.5)),
-                point_b: Some(WorldPoint::new(f + 0.4, f + 0.4)),
-                scan_points: (0..100)
-                    .map(|k| WorldPoint::new(-1.0 + k as f64 * 0.05, 4.0))
-                    .collect(),
-            });
-        }
-        RunLog {
-            goal: Some(WorldPoint::new(3.5, 3.5)),
-            legs,
-        }
-    }
-
-    #[test]
-    fn png_is_a_png_of_the_right_size_with_ink() {
-        let png = render_png(&log(), "test run").unwrap();
-        let img = image::load_from_memory(&png).unwrap().to_rgb8();
-        assert_eq!(img.dimensions(), SIZE);
-        // Some pixels are pure blue (the estimated path) and most are white.
-        let blue = img.pixels().filter(|p| p.0 == [0, 0, 255]).count();
-        let white = img.pixels().filter(|p| p.0 == [255, 255, 255]).count();
-        assert!(blue > 50, "blue pixels: {blue}");
-        assert!(white > (SIZE.0 * SIZE.1 / 2) as usize);
-    }
-
-    #[test]
-    fn svg_has_legend_and_axes() {
-        let svg = render_svg(&log(), "test run").unwrap();
-        for label in [
-            "estimated path",
-            "true path",
-            "point B",
-            "target",
-            "x (m)",
-            "y (m)",
-        ] {
-            assert!(svg.contains(label), "missing {label}");
-        }
-    }
-
-    #[test]
-    fn a_path_that_turns_back_draws_no_spike() {
-        // True positions of the last 31 legs of a run that went back and forth in a dead end
-        // (generated world 9, pair 2): as one wide polyline, a join drew a line off the chart.
-        const TRUE: [(f64, f64); 31] = [
-            (-7.254, -1.541),
-            (-7.484, -1.393),
-            (-7.434, -1.8),
-            (-7.409, -1.322),
-            (-7.164, -1.48),
-            (-7.22, -1.519),
-            (-7.471, -1.703),
-            (-7.267, -1.555),
-            (-7.473, -1.391),
-            (-7.442, -1.786),
-            (-7.415, -1.325),
-            (-7.171, -1.482),
-            (-7.467, -1.654),
-            (-7.47, -1.426),
-            (-7.238, -1.55),
-            (-7.479, -1.72),
-            (-7.278, -1.568),
-            (-7.474, -1.365),
-            (-7.446, -1.797),
-            (-7.43, -1.32),
-            (-7.185, -1.482),
-            (-7.475, -1.678),
-            (-7.221, -1.513),
-            (-7.467, -1.398),
-            (-7.439, -1.807),
-            (-7.399, -1.318),
-            (-7.155, -1.491),
-            (-7.466, -1.624),
-            (-7.424, -1.315),
-            (-7.18, -1.488),
-            (-7.476, -1.644),
-        ];
-        // The estimate is drawn 1 m north of the truth: the same shape, whose ink gives the
-        // size the red ink must have.
-        let legs = TRUE
-            .iter()
-            .enumerate()
-            .map(|(k, &(x, y))| LegRecord {
-                leg: k,
-                estimate: Pose2::new(x, y + 1.0, 0.0),
-                truth: Some(Pose2::new(x, y, 0.0)),
-                landmark: None,
-                point_b: None,
-                scan_points: Vec::new(),
-            })
-            .collect();
-        let log = RunLog { goal: None, legs };
-        let png = render_png(&log, "reversals").unwrap();
-        let img = image::load_from_memory(&png).unwrap().to_rgb8();
-        // Width and height of the ink of colour `c`, outside the legend's box (top left).
-        let extent = |c: [u8; 3]| {
-            let (mut x0, mut x1, mut y0, mut y1) = (u32::MAX, 0, u32::MAX, 0);
-            for (x, y, p) in img.enumerate_pixels() {
-                if p.0 == c && !(x < 360 && y < 180) {
-                    (x0, x1, y0, y1) = (x0.min(x), x1.max(x), y0.min(y), y1.max(y));
-                }
-            }
-            assert!(x0 <= x1, "no ink of {c:?}");
-            (x1 - x0, y1 - y0)
-        };
-        let (blue, red) = (extent([0, 0, 255]), extent([255, 0, 0]));
-        // The blue path carries 3-pixel dots at its points; the red one does not.
-        assert!(
-            red.0 <= blue.0 + 2 && red.1 <= blue.1 + 2 && red.0 + 12 >= blue.0,
-            "red ink {red:?} against blue {blue:?} (pixels)"
-        );
-    }
-
-    #[test]
-    fn empty_log_still_draws() {
-        assert!(render_png(&RunLog::default(), "empty").is_ok());
-    }
 
     #[test]
     fn bounds_are_square_and_hold_everything() {
-        let (x0, x1, y0, y1) = bounds(&log());
+        let leg = LegRecord {
+            leg: 0,
+            estimate: Pose2::new(0.0, 0.0, 0.5),
+            truth: Some(Pose2::new(3.55, 3.0, 0.5)),
+            landmark: None,
+            point_b: None,
+            scan_points: vec![WorldPoint::new(-1.0, 4.0), WorldPoint::new(2.0, -0.5)],
+        };
+        let log = RunLog {
+            goal: Some(WorldPoint::new(3.5, 3.5)),
+            legs: vec![leg],
+        };
+        let (x0, x1, y0, y1) = bounds(&log);
         assert!((x1 - x0 - (y1 - y0)).abs() < 1e-12);
         assert!(x0 <= -1.0 && x1 >= 3.55 && y0 <= -0.5 && y1 >= 4.0);
     }

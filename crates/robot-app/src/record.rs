@@ -8,8 +8,12 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use anyhow::Context;
-use scan_log::{GeometryOverride, LogSource, McapRecorder, RecordedLaser, RecordedTruth};
-use scan_types::{MotionBase, Pose2, Scan, ScanGeometry, WorldPoint};
+use robot_base::{Command, LoggingBase, NoMotion};
+use scan_log::{
+    GeometryOverride, LEGS_METADATA, LegSummary, LogSource, McapRecorder, RecordedLaser,
+    RecordedTruth, legs_metadata,
+};
+use scan_types::{Pose2, Scan, ScanGeometry, WorldPoint};
 
 use crate::config::Params;
 use crate::outputs::RunLog;
@@ -111,108 +115,17 @@ fn sensor_override(name: &str) -> anyhow::Result<GeometryOverride> {
     })
 }
 
-/// Name of the MCAP metadata record with the settings of a recorded simulated run.
-pub const RUN_METADATA: &str = "goalseek.run";
-/// Name of the MCAP metadata record with the legs a recorded run drove.
-pub const LEGS_METADATA: &str = "goalseek.legs";
+/// The settings of a recorded run with the loop's tuning ([`scan_log::RunSettings`]).
+pub type RunSettings = scan_log::RunSettings<Params>;
 
-/// The settings of a recorded run: what a replay through the loop needs to repeat it.
-#[derive(Debug, Clone, PartialEq)]
-pub struct RunSettings {
-    /// Start pose (the estimate's origin).
-    pub start: Pose2,
-    /// Target.
-    pub goal: WorldPoint,
-    /// Tuning of the loop.
-    pub config: Params,
-    /// World name (information only).
-    pub world: String,
-    /// Sensor preset name (information only).
-    pub sensor: String,
-    /// Noise seed (information only).
-    pub seed: u64,
-    /// Noise on (information only).
-    pub noise: bool,
-}
-
-fn json_of<T: serde::Serialize>(v: &T) -> String {
-    serde_json::to_string(v).expect("plain data serialises")
-}
-
-fn json_field<T: serde::de::DeserializeOwned>(
-    m: &BTreeMap<String, String>,
-    key: &str,
-) -> anyhow::Result<T> {
-    let text = m
-        .get(key)
-        .with_context(|| format!("metadata '{RUN_METADATA}' has no '{key}'"))?;
-    serde_json::from_str(text)
-        .with_context(|| format!("metadata '{RUN_METADATA}': '{key}' = {text:?}"))
-}
-
-impl RunSettings {
-    /// The settings as MCAP metadata (JSON values; floats round-trip exactly).
-    pub fn to_metadata(&self) -> BTreeMap<String, String> {
-        let p = self.start;
-        BTreeMap::from([
-            ("start".into(), json_of(&[p.x_m, p.y_m, p.theta_rad])),
-            ("goal".into(), json_of(&[self.goal.x_m(), self.goal.y_m()])),
-            ("config".into(), json_of(&self.config)),
-            ("world".into(), json_of(&self.world)),
-            ("sensor".into(), json_of(&self.sensor)),
-            ("seed".into(), json_of(&self.seed)),
-            ("noise".into(), json_of(&self.noise)),
-        ])
-    }
-
-    /// Reads the settings back from [`RunSettings::to_metadata`].
-    pub fn from_metadata(m: &BTreeMap<String, String>) -> anyhow::Result<Self> {
-        let [x_m, y_m, theta_rad]: [f64; 3] = json_field(m, "start")?;
-        let [gx, gy]: [f64; 2] = json_field(m, "goal")?;
-        let config: Params = json_field(m, "config")?;
-        config.validate()?;
-        Ok(Self {
-            start: Pose2 {
-                x_m,
-                y_m,
-                theta_rad,
-            },
-            goal: WorldPoint::new(gx, gy),
-            config,
-            world: json_field(m, "world")?,
-            sensor: json_field(m, "sensor")?,
-            seed: json_field(m, "seed")?,
-            noise: json_field(m, "noise")?,
-        })
-    }
-
-    /// The settings of a recording made by `robot-app sim --record`.
-    pub fn read(path: &Path) -> anyhow::Result<Self> {
-        let meta = scan_log::read_mcap_metadata(path)?;
-        let (_, m) = meta
-            .iter()
-            .find(|(n, _)| n == RUN_METADATA)
-            .with_context(|| {
-                format!(
-                    "{}: no '{RUN_METADATA}' metadata (not a recording of `robot-app sim --record`)",
-                    path.display()
-                )
-            })?;
-        Self::from_metadata(m).with_context(|| path.display().to_string())
-    }
-}
-
-/// One leg as a run recorded it: where it ended by the estimate, its landmark and point B.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct LegSummary {
-    /// Leg number (0 = start).
-    pub leg: usize,
-    /// Estimate at the end of the leg: x, y, theta (rad).
-    pub estimate: [f64; 3],
-    /// The landmark the leg localised on (world frame by the estimate).
-    pub landmark: Option<[f64; 2]>,
-    /// Point B of the leg.
-    pub point_b: Option<[f64; 2]>,
+/// The settings of a recording made by `robot-app sim --record`, the tuning validated.
+pub fn read_settings(path: &Path) -> anyhow::Result<RunSettings> {
+    let settings = RunSettings::read(path)?;
+    settings
+        .config
+        .validate()
+        .with_context(|| path.display().to_string())?;
+    Ok(settings)
 }
 
 /// The legs of a run's log.
@@ -227,20 +140,6 @@ pub fn leg_summaries(log: &RunLog) -> Vec<LegSummary> {
             point_b: l.point_b.map(xy),
         })
         .collect()
-}
-
-/// The legs a recorded run drove (metadata written by `robot-app sim --record`), if stored.
-pub fn read_recorded_legs(path: &Path) -> anyhow::Result<Option<(String, Vec<LegSummary>)>> {
-    let meta = scan_log::read_mcap_metadata(path)?;
-    let Some((_, m)) = meta.iter().find(|(n, _)| n == LEGS_METADATA) else {
-        return Ok(None);
-    };
-    let legs = m
-        .get("legs")
-        .with_context(|| format!("{}: '{LEGS_METADATA}' without 'legs'", path.display()))?;
-    let legs = serde_json::from_str(legs)
-        .with_context(|| format!("{}: '{LEGS_METADATA}' legs", path.display()))?;
-    Ok(Some((m.get("reason").cloned().unwrap_or_default(), legs)))
 }
 
 impl Recorder {
@@ -260,73 +159,8 @@ impl Recorder {
 
     /// Writes the legs of a finished run ([`LEGS_METADATA`]).
     pub fn write_legs(&mut self, log: &RunLog, reason: &str) -> anyhow::Result<()> {
-        let m = BTreeMap::from([
-            ("legs".to_string(), json_of(&leg_summaries(log))),
-            ("reason".to_string(), reason.to_string()),
-        ]);
+        let m = legs_metadata(&leg_summaries(log), reason);
         self.write_metadata(LEGS_METADATA, &m)
-    }
-}
-
-/// A motion command the loop gave.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Command {
-    /// Rotate in place, radians.
-    Rotate(f64),
-    /// Drive straight, metres.
-    Forward(f64),
-    /// Stop.
-    Stop,
-}
-
-/// A motion base that records every command and passes it on to `inner`.
-pub struct LoggingBase<M> {
-    /// The base that executes the commands.
-    pub inner: M,
-    /// Every command, in order.
-    pub commands: Vec<Command>,
-}
-
-impl<M: MotionBase> LoggingBase<M> {
-    /// Wraps `inner`.
-    pub fn new(inner: M) -> Self {
-        Self {
-            inner,
-            commands: Vec::new(),
-        }
-    }
-}
-
-impl<M: MotionBase> MotionBase for LoggingBase<M> {
-    type Error = M::Error;
-    fn rotate(&mut self, angle_rad: f64) -> Result<(), Self::Error> {
-        self.commands.push(Command::Rotate(angle_rad));
-        self.inner.rotate(angle_rad)
-    }
-    fn forward(&mut self, distance_m: f64) -> Result<(), Self::Error> {
-        self.commands.push(Command::Forward(distance_m));
-        self.inner.forward(distance_m)
-    }
-    fn stop(&mut self) -> Result<(), Self::Error> {
-        self.commands.push(Command::Stop);
-        self.inner.stop()
-    }
-}
-
-/// A motion base that does nothing (a replay: the recorded scans already moved).
-#[derive(Debug, Default, Clone, Copy)]
-pub struct NoMotion;
-
-impl MotionBase for NoMotion {
-    type Error = std::convert::Infallible;
-    fn rotate(&mut self, _angle_rad: f64) -> Result<(), Self::Error> {
-        Ok(())
-    }
-    fn forward(&mut self, _distance_m: f64) -> Result<(), Self::Error> {
-        Ok(())
-    }
-    fn stop(&mut self) -> Result<(), Self::Error> {
-        Ok(())
     }
 }
 

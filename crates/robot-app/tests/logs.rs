@@ -3,7 +3,6 @@
 use std::path::PathBuf;
 
 use robot_app::cmd::emulate::{self, EmulateArgs};
-use robot_app::cmd::map::build_map;
 use robot_app::cmd::replay::{self, ReplayArgs};
 use robot_app::cmd::scan::{self, ScanArgs, ScanFormat};
 use robot_app::record::{Recorder, open_log};
@@ -167,7 +166,7 @@ fn intel_map_endpoints_fit_the_map() {
         scans.push((r.pose.unwrap(), r.scan.clone()));
     }
     assert_eq!(scans.len(), 910);
-    let (_, stats) = build_map(&g, &scans, 0.05, 20.0, false);
+    let (_, stats) = localiser::build_map(&g, &scans, 0.05, 20.0, false);
     // Acceptance: at least 90 % of the endpoints within one 5 cm cell of an occupied cell.
     assert!(stats.endpoint_fit() >= 0.90, "{:.3}", stats.endpoint_fit());
 }

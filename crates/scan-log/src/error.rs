@@ -114,6 +114,15 @@ pub enum LogError {
         /// Ray rows in the file.
         got: usize,
     },
+    /// A metadata record of a recording is missing or does not decode.
+    #[error("{context}")]
+    Metadata {
+        /// Which record and key, and the file where known.
+        context: String,
+        /// The JSON error, if the value is there but does not decode.
+        #[source]
+        source: Option<serde_json::Error>,
+    },
     /// The recorder was used after `finish`.
     #[error("{}: the recording is already finished", path.display())]
     Finished {

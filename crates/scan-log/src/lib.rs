@@ -11,6 +11,8 @@
 //! - [`open_log`], [`LoopingLog`], [`RecordedLaser`]: a log played back as a laser, with a
 //!   geometry override, looping at its end, or with its recorded true poses.
 //! - [`write_scan_csv`], [`read_scan_csv`]: one scan as the CSV of `robot-app scan`.
+//! - [`RunSettings`], [`LegSummary`]: the metadata of a recorded simulated run, its settings
+//!   and the legs it drove, for a replay through the loop.
 //!
 //! ```
 //! use scan_log::{LogOptions, LogSource};
@@ -34,6 +36,7 @@ mod error;
 mod mcap_io;
 mod playback;
 mod record;
+mod run_meta;
 mod source;
 mod text;
 
@@ -49,5 +52,8 @@ pub use mcap_io::{
 };
 pub use playback::{GeometryOverride, LoopingLog, RecordedLaser, RecordedTruth, open_log};
 pub use record::LogRecord;
+pub use run_meta::{
+    LEGS_METADATA, LegSummary, RUN_METADATA, RunSettings, legs_metadata, read_recorded_legs,
+};
 pub use source::{LogFormat, LogOptions, LogReader, LogSource, open_text};
 pub use text::{TextFormat, TextLog};

@@ -308,46 +308,7 @@ impl McapRecorder {
         };
         let seq = self.seq;
         let (stamp, ns) = time_of(scan.host_time_s);
-        let shown = est_pose.or(true_pose);
-        let msg = LaserScanMsg {
-            timestamp: Time {
-                sec: stamp.sec,
-                nsec: stamp.nsec,
-            },
-            frame_id: if shown.is_some() { "world" } else { "laser" }.into(),
-            pose: FoxPose::of(shown),
-            start_angle: geometry.first_bearing_rad,
-            end_angle: geometry.last_bearing_rad(),
-            ranges: scan
-                .ranges_m
-                .iter()
-                .map(|&r| if r.is_finite() { r } else { 0.0 })
-                .collect(),
-            intensities: scan
-                .intensities
-                .as_ref()
-                .map(|v| v.iter().map(|&x| f64::from(x)).collect())
-                .unwrap_or_default(),
-            goalseek: ScanExtra {
-                seq,
-                host_time_s: scan.host_time_s,
-                sensor_time_ms: scan.sensor_time_ms,
-                first_bearing_rad: geometry.first_bearing_rad,
-                increment_rad: geometry.increment_rad,
-                ray_count: geometry.ray_count,
-                min_range_m: geometry.min_range_m,
-                max_range_m: geometry.max_range_m,
-                status: scan
-                    .status
-                    .iter()
-                    .map(|s| match s {
-                        RayStatus::Hit => STATUS_HIT,
-                        RayStatus::MaxRange => STATUS_MAX_RANGE,
-                        RayStatus::Error(c) => i32::from(*c),
-                    })
-                    .collect(),
-            },
-        };
+        let msg = laser_scan_msg(geometry, scan, seq, &stamp, est_pose.or(true_pose));
         let data = serde_json::to_vec(&msg).expect("plain data serialises");
         let header = |channel_id| mcap::records::MessageHeader {
             channel_id,
@@ -360,20 +321,7 @@ impl McapRecorder {
             .map_err(mcap_err)?;
         for (ch, pose) in [(self.true_ch, true_pose), (self.est_ch, est_pose)] {
             let Some(p) = pose else { continue };
-            let msg = PoseMsg {
-                timestamp: Time {
-                    sec: stamp.sec,
-                    nsec: stamp.nsec,
-                },
-                frame_id: "world".into(),
-                pose: FoxPose::of(Some(p)),
-                goalseek: PoseExtra {
-                    seq,
-                    x_m: p.x_m,
-                    y_m: p.y_m,
-                    theta_rad: p.theta_rad,
-                },
-            };
+            let msg = pose_msg(p, seq, &stamp);
             let data = serde_json::to_vec(&msg).expect("plain data serialises");
             writer
                 .write_to_known_channel(&header(ch), &data)
@@ -432,6 +380,74 @@ impl McapRecorder {
             source,
         })?;
         Ok(self.seq)
+    }
+}
+
+/// The Foxglove `LaserScan` message of scan number `seq`, drawn at `shown` (in frame `world`)
+/// or in frame `laser` without a pose.
+fn laser_scan_msg(
+    geometry: &ScanGeometry,
+    scan: &Scan,
+    seq: u64,
+    stamp: &Time,
+    shown: Option<Pose2>,
+) -> LaserScanMsg {
+    LaserScanMsg {
+        timestamp: Time {
+            sec: stamp.sec,
+            nsec: stamp.nsec,
+        },
+        frame_id: if shown.is_some() { "world" } else { "laser" }.into(),
+        pose: FoxPose::of(shown),
+        start_angle: geometry.first_bearing_rad,
+        end_angle: geometry.last_bearing_rad(),
+        ranges: scan
+            .ranges_m
+            .iter()
+            .map(|&r| if r.is_finite() { r } else { 0.0 })
+            .collect(),
+        intensities: scan
+            .intensities
+            .as_ref()
+            .map(|v| v.iter().map(|&x| f64::from(x)).collect())
+            .unwrap_or_default(),
+        goalseek: ScanExtra {
+            seq,
+            host_time_s: scan.host_time_s,
+            sensor_time_ms: scan.sensor_time_ms,
+            first_bearing_rad: geometry.first_bearing_rad,
+            increment_rad: geometry.increment_rad,
+            ray_count: geometry.ray_count,
+            min_range_m: geometry.min_range_m,
+            max_range_m: geometry.max_range_m,
+            status: scan
+                .status
+                .iter()
+                .map(|s| match s {
+                    RayStatus::Hit => STATUS_HIT,
+                    RayStatus::MaxRange => STATUS_MAX_RANGE,
+                    RayStatus::Error(c) => i32::from(*c),
+                })
+                .collect(),
+        },
+    }
+}
+
+/// The Foxglove `PoseInFrame` message of pose `p` of scan number `seq`.
+fn pose_msg(p: Pose2, seq: u64, stamp: &Time) -> PoseMsg {
+    PoseMsg {
+        timestamp: Time {
+            sec: stamp.sec,
+            nsec: stamp.nsec,
+        },
+        frame_id: "world".into(),
+        pose: FoxPose::of(Some(p)),
+        goalseek: PoseExtra {
+            seq,
+            x_m: p.x_m,
+            y_m: p.y_m,
+            theta_rad: p.theta_rad,
+        },
     }
 }
 

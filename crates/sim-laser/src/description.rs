@@ -297,32 +297,70 @@ pub(crate) struct ParsedToml {
     pub bitmap: Option<Bitmap>,
 }
 
+/// The text and file of a TOML world being parsed, for errors that name a line and a field.
+struct TomlSource<'a> {
+    text: &'a str,
+    path: &'a Path,
+}
+
+impl TomlSource<'_> {
+    fn err(&self, line: Option<usize>, field: &str, message: String) -> SimError {
+        SimError::Parse {
+            path: self.path.to_path_buf(),
+            line,
+            field: field.to_string(),
+            message,
+        }
+    }
+
+    /// The line where `span` starts.
+    fn line(&self, span: std::ops::Range<usize>) -> Option<usize> {
+        Some(line_of(self.text, span.start))
+    }
+}
+
+fn finite(v: &[f64]) -> bool {
+    v.iter().all(|x| x.is_finite())
+}
+
 /// Parses the TOML world text; `path` names the file in errors and anchors the bitmap path.
 pub(crate) fn parse_toml(text: &str, path: &Path) -> Result<ParsedToml, SimError> {
-    let parse_err = |line: Option<usize>, field: &str, message: String| SimError::Parse {
-        path: path.to_path_buf(),
-        line,
-        field: field.to_string(),
-        message,
-    };
+    let src = TomlSource { text, path };
     let file: TomlWorld = toml::from_str(text).map_err(|e| {
         let line = e.span().map(|s| line_of(text, s.start));
-        parse_err(line, "toml", e.message().trim().to_string())
+        src.err(line, "toml", e.message().trim().to_string())
     })?;
+    let mut desc = toml_frame(&src, &file)?;
+    toml_obstacles(&src, &file, &mut desc)?;
+    let bitmap = toml_bitmap(&src, &file)?;
+    if let Some(c) = file.cell_size_m
+        && !(c.is_finite() && c > 0.0)
+    {
+        return Err(src.err(None, "cell_size_m", format!("{c} must be > 0")));
+    }
+    Ok(ParsedToml {
+        desc,
+        cell_size_m: file.cell_size_m,
+        bitmap,
+    })
+}
+
+/// The name, bounds, start and target of a TOML world (no obstacles yet).
+fn toml_frame(src: &TomlSource, file: &TomlWorld) -> Result<WorldDescription, SimError> {
     let mut desc = WorldDescription {
         name: file.name.clone().unwrap_or_else(|| {
-            path.file_stem()
+            src.path
+                .file_stem()
                 .map(|s| s.to_string_lossy().into_owned())
                 .unwrap_or_default()
         }),
         ..Default::default()
     };
-    let finite = |v: &[f64]| v.iter().all(|x| x.is_finite());
     if let Some(b) = &file.bounds {
-        let line = Some(line_of(text, b.span().start));
+        let line = src.line(b.span());
         let b = b.get_ref();
         if !(finite(&b.min) && finite(&b.max) && b.max[0] > b.min[0] && b.max[1] > b.min[1]) {
-            return Err(parse_err(
+            return Err(src.err(
                 line,
                 "bounds",
                 "min and max must be finite with max > min".into(),
@@ -334,8 +372,8 @@ pub(crate) fn parse_toml(text: &str, path: &Path) -> Result<ParsedToml, SimError
     if let Some(s) = &file.start {
         let v = *s.get_ref();
         if !finite(&v) {
-            return Err(parse_err(
-                Some(line_of(text, s.span().start)),
+            return Err(src.err(
+                src.line(s.span()),
                 "start",
                 "must be [x_m, y_m, theta_deg], finite".into(),
             ));
@@ -343,12 +381,21 @@ pub(crate) fn parse_toml(text: &str, path: &Path) -> Result<ParsedToml, SimError
         desc.start = Some([v[0], v[1], v[2].to_radians()]);
     }
     desc.target = file.target;
-    // Each obstacle is checked as it is added, so an error names its line.
+    Ok(desc)
+}
+
+/// Adds the boxes, circles, polygons and walls of a TOML world to `desc`, in that order; each
+/// obstacle is checked as it is added, so an error names its line.
+fn toml_obstacles(
+    src: &TomlSource,
+    file: &TomlWorld,
+    desc: &mut WorldDescription,
+) -> Result<(), SimError> {
     let mut push = |o: Obstacle, span: std::ops::Range<usize>, field: &str| {
         let idx = desc.obstacles.len();
         o.validate(idx).map_err(|e| {
-            parse_err(
-                Some(line_of(text, span.start)),
+            src.err(
+                src.line(span),
                 field,
                 e.to_string()
                     .replace(&format!("invalid world: obstacle {idx}: "), ""),
@@ -392,58 +439,53 @@ pub(crate) fn parse_toml(text: &str, path: &Path) -> Result<ParsedToml, SimError
     for w in &file.wall {
         let v = w.get_ref();
         if !(v.thickness.is_finite() && v.thickness >= 0.0) {
-            return Err(parse_err(
-                Some(line_of(text, w.span().start)),
+            return Err(src.err(
+                src.line(w.span()),
                 "wall.thickness",
                 format!("{} must be finite and >= 0", v.thickness),
             ));
         }
-        let o = if v.thickness > 0.0 {
-            let d = [v.to[0] - v.from[0], v.to[1] - v.from[1]];
-            Obstacle::Box {
-                centre: [(v.from[0] + v.to[0]) / 2.0, (v.from[1] + v.to[1]) / 2.0],
-                size: [d[0].hypot(d[1]).max(1e-9), v.thickness],
-                angle_rad: d[1].atan2(d[0]),
-            }
-        } else {
-            Obstacle::Segment { a: v.from, b: v.to }
-        };
-        push(o, w.span(), "wall")?;
+        push(wall_obstacle(v), w.span(), "wall")?;
     }
-    let bitmap = match &file.bitmap {
-        None => None,
-        Some(b) => {
-            let line = Some(line_of(text, b.span().start));
-            let v = b.get_ref();
-            if !(finite(&v.size) && v.size[0] > 0.0 && v.size[1] > 0.0 && finite(&v.centre)) {
-                return Err(parse_err(
-                    line,
-                    "bitmap.size",
-                    "size must be > 0 and centre finite".into(),
-                ));
-            }
-            let img_path = path.parent().unwrap_or(Path::new(".")).join(&v.image);
-            let img = image::open(&img_path)
-                .map_err(|e| {
-                    parse_err(line, "bitmap.image", format!("{}: {e}", img_path.display()))
-                })?
-                .to_rgba8();
-            Some(
-                bitmap_from_image(&img, v.size, v.centre, v.boundary)
-                    .ok_or_else(|| parse_err(line, "bitmap.image", "image is empty".into()))?,
-            )
+    Ok(())
+}
+
+/// A wall as an obstacle: a thin box when it has a thickness, else a segment.
+fn wall_obstacle(v: &TomlWall) -> Obstacle {
+    if v.thickness > 0.0 {
+        let d = [v.to[0] - v.from[0], v.to[1] - v.from[1]];
+        Obstacle::Box {
+            centre: [(v.from[0] + v.to[0]) / 2.0, (v.from[1] + v.to[1]) / 2.0],
+            size: [d[0].hypot(d[1]).max(1e-9), v.thickness],
+            angle_rad: d[1].atan2(d[0]),
         }
-    };
-    if let Some(c) = file.cell_size_m
-        && !(c.is_finite() && c > 0.0)
-    {
-        return Err(parse_err(None, "cell_size_m", format!("{c} must be > 0")));
+    } else {
+        Obstacle::Segment { a: v.from, b: v.to }
     }
-    Ok(ParsedToml {
-        desc,
-        cell_size_m: file.cell_size_m,
-        bitmap,
-    })
+}
+
+/// The bitmap a TOML world refers to (path relative to the world file), if any.
+fn toml_bitmap(src: &TomlSource, file: &TomlWorld) -> Result<Option<Bitmap>, SimError> {
+    let Some(b) = &file.bitmap else {
+        return Ok(None);
+    };
+    let line = src.line(b.span());
+    let v = b.get_ref();
+    if !(finite(&v.size) && v.size[0] > 0.0 && v.size[1] > 0.0 && finite(&v.centre)) {
+        return Err(src.err(
+            line,
+            "bitmap.size",
+            "size must be > 0 and centre finite".into(),
+        ));
+    }
+    let img_path = src.path.parent().unwrap_or(Path::new(".")).join(&v.image);
+    let img = image::open(&img_path)
+        .map_err(|e| src.err(line, "bitmap.image", format!("{}: {e}", img_path.display())))?
+        .to_rgba8();
+    Ok(Some(
+        bitmap_from_image(&img, v.size, v.centre, v.boundary)
+            .ok_or_else(|| src.err(line, "bitmap.image", "image is empty".into()))?,
+    ))
 }
 
 impl World {

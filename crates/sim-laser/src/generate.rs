@@ -161,16 +161,46 @@ fn wall_with_gaps(
 pub fn generate_world(seed: u64, p: &GenParams) -> Result<WorldDescription, SimError> {
     p.validate()?;
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let (hw, hh, t) = (p.width_m / 2.0, p.height_m / 2.0, p.wall_thickness_m);
-    let c2 = p.corridor_width_m / 2.0;
-    let n = p.rooms_per_side;
+    let (hw, hh) = (p.width_m / 2.0, p.height_m / 2.0);
     let mut obs = Vec::new();
-    // Outer walls, inside the bounds.
-    wall_with_gaps(&mut obs, true, -hh + t / 2.0, -hw, hw, &[], t);
-    wall_with_gaps(&mut obs, true, hh - t / 2.0, -hw, hw, &[], t);
-    wall_with_gaps(&mut obs, false, -hw + t / 2.0, -hh + t, hh - t, &[], t);
-    wall_with_gaps(&mut obs, false, hw - t / 2.0, -hh + t, hh - t, &[], t);
-    // Room dividers: jittered splits of the width, the same above and below.
+    outer_walls(&mut obs, p);
+    let xs = room_splits(&mut rng, p);
+    let (rooms, doors) = rooms_and_doors(&mut rng, p, &xs, &mut obs);
+    let centre_of = |r: &Room| [(r.0 + r.1) / 2.0, (r.2 + r.3) / 2.0];
+    let start_room = rooms[0];
+    let target_room = rooms[rooms.len() - 1];
+    let start_xy = centre_of(&start_room);
+    let target = centre_of(&target_room);
+    let start_theta = rng.random_range(-std::f64::consts::PI..std::f64::consts::PI);
+    let keep_clear: Vec<[f64; 2]> = doors.iter().copied().chain([start_xy, target]).collect();
+    place_clutter(&mut rng, p, &rooms, &keep_clear, &mut obs);
+    Ok(WorldDescription {
+        name: format!("generated-{seed}"),
+        bounds: Some(([-hw, -hh], [hw, hh])),
+        boundary: false,
+        obstacles: obs,
+        start: Some([start_xy[0], start_xy[1], start_theta]),
+        target: Some(target),
+    })
+}
+
+/// A room's interior: x0, x1, y0, y1.
+type Room = (f64, f64, f64, f64);
+
+/// The four outer walls, inside the bounds.
+fn outer_walls(obs: &mut Vec<Obstacle>, p: &GenParams) {
+    let (hw, hh, t) = (p.width_m / 2.0, p.height_m / 2.0, p.wall_thickness_m);
+    wall_with_gaps(obs, true, -hh + t / 2.0, -hw, hw, &[], t);
+    wall_with_gaps(obs, true, hh - t / 2.0, -hw, hw, &[], t);
+    wall_with_gaps(obs, false, -hw + t / 2.0, -hh + t, hh - t, &[], t);
+    wall_with_gaps(obs, false, hw - t / 2.0, -hh + t, hh - t, &[], t);
+}
+
+/// The x of the room dividers: jittered splits of the width, the same above and below (with
+/// the outer walls' x at both ends).
+fn room_splits(rng: &mut ChaCha8Rng, p: &GenParams) -> Vec<f64> {
+    let (hw, t) = (p.width_m / 2.0, p.wall_thickness_m);
+    let n = p.rooms_per_side;
     let room_w = p.width_m / n as f64;
     let jitter = (room_w - p.door_width_m - 4.0 * t - 0.4).max(0.0) * 0.25;
     let mut xs = vec![-hw];
@@ -178,7 +208,20 @@ pub fn generate_world(seed: u64, p: &GenParams) -> Result<WorldDescription, SimE
         xs.push(-hw + k as f64 * room_w + rng.random_range(-jitter..=jitter));
     }
     xs.push(hw);
-    // Rooms: (x0, x1, y0, y1) interiors; doors as points to keep clear.
+    xs
+}
+
+/// The rooms on both sides of the corridor, their walls with a door each and the side doors
+/// between rooms; returns the rooms' interiors and the doors as points to keep clear.
+fn rooms_and_doors(
+    rng: &mut ChaCha8Rng,
+    p: &GenParams,
+    xs: &[f64],
+    obs: &mut Vec<Obstacle>,
+) -> (Vec<Room>, Vec<[f64; 2]>) {
+    let (hw, hh, t) = (p.width_m / 2.0, p.height_m / 2.0, p.wall_thickness_m);
+    let c2 = p.corridor_width_m / 2.0;
+    let n = p.rooms_per_side;
     let mut rooms = Vec::new();
     let mut doors: Vec<[f64; 2]> = Vec::new();
     let dw = p.door_width_m;
@@ -203,7 +246,7 @@ pub fn generate_world(seed: u64, p: &GenParams) -> Result<WorldDescription, SimE
             doors.push([g0 + dw / 2.0, wall_y]);
             rooms.push((x0, x1, ry0, ry1));
         }
-        wall_with_gaps(&mut obs, true, wall_y, -hw + t, hw - t, &gaps, t);
+        wall_with_gaps(obs, true, wall_y, -hw + t, hw - t, &gaps, t);
         for &x in xs.iter().take(n).skip(1) {
             let mut g = Vec::new();
             if rng.random::<f64>() < p.side_door_prob {
@@ -215,18 +258,24 @@ pub fn generate_world(seed: u64, p: &GenParams) -> Result<WorldDescription, SimE
                     doors.push([x, g0 + dw / 2.0]);
                 }
             }
-            wall_with_gaps(&mut obs, false, x, ry0, ry1, &g, t);
+            wall_with_gaps(obs, false, x, ry0, ry1, &g, t);
         }
     }
-    let centre_of = |r: &(f64, f64, f64, f64)| [(r.0 + r.1) / 2.0, (r.2 + r.3) / 2.0];
-    let start_room = rooms[0];
-    let target_room = rooms[rooms.len() - 1];
-    let start_xy = centre_of(&start_room);
-    let target = centre_of(&target_room);
-    let start_theta = rng.random_range(-std::f64::consts::PI..std::f64::consts::PI);
-    // Clutter, rejection-sampled inside rooms; placed items as (centre, circumradius).
+    (rooms, doors)
+}
+
+/// Clutter boxes then circles, rejection-sampled inside rooms, clear of the walls, of
+/// `keep_clear` and of each other.
+fn place_clutter(
+    rng: &mut ChaCha8Rng,
+    p: &GenParams,
+    rooms: &[Room],
+    keep_clear: &[[f64; 2]],
+    obs: &mut Vec<Obstacle>,
+) {
+    let dw = p.door_width_m;
+    // Placed items as (centre, circumradius).
     let mut placed: Vec<([f64; 2], f64)> = Vec::new();
-    let keep_clear: Vec<[f64; 2]> = doors.iter().copied().chain([start_xy, target]).collect();
     let gap = p.clearance_m;
     let kinds = std::iter::repeat_n(true, p.boxes).chain(std::iter::repeat_n(false, p.circles));
     for is_box in kinds {
@@ -289,12 +338,4 @@ pub fn generate_world(seed: u64, p: &GenParams) -> Result<WorldDescription, SimE
             break;
         }
     }
-    Ok(WorldDescription {
-        name: format!("generated-{seed}"),
-        bounds: Some(([-hw, -hh], [hw, hh])),
-        boundary: false,
-        obstacles: obs,
-        start: Some([start_xy[0], start_xy[1], start_theta]),
-        target: Some(target),
-    })
 }

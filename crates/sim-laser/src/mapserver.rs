@@ -43,21 +43,39 @@ fn parse_num_list(v: &str) -> Option<Vec<f64>> {
         .collect()
 }
 
-/// Parses map_server YAML text (flat `key: value` lines); errors name the line and key.
-pub fn parse_map_yaml(text: &str, path: &Path) -> Result<MapServerYaml, SimError> {
-    let err = |line: Option<usize>, field: &str, message: String| SimError::Parse {
+fn yaml_err(path: &Path, line: Option<usize>, field: &str, message: String) -> SimError {
+    SimError::Parse {
         path: path.to_path_buf(),
         line,
         field: field.to_string(),
         message,
+    }
+}
+
+/// The keys of a map_server YAML read so far (defaults for the optional ones).
+struct YamlKeys {
+    image: Option<String>,
+    resolution: Option<f64>,
+    origin: Option<[f64; 3]>,
+    negate: bool,
+    occ: f64,
+    free: f64,
+    mode: MapMode,
+}
+
+/// Parses map_server YAML text (flat `key: value` lines); errors name the line and key.
+pub fn parse_map_yaml(text: &str, path: &Path) -> Result<MapServerYaml, SimError> {
+    let err =
+        |line: Option<usize>, field: &str, message: String| yaml_err(path, line, field, message);
+    let mut keys = YamlKeys {
+        image: None,
+        resolution: None,
+        origin: None,
+        negate: false,
+        occ: 0.65,
+        free: 0.196,
+        mode: MapMode::Trinary,
     };
-    let mut image = None;
-    let mut resolution = None;
-    let mut origin = None;
-    let mut negate = false;
-    let mut occ = 0.65;
-    let mut free = 0.196;
-    let mut mode = MapMode::Trinary;
     for (n, raw) in text.lines().enumerate() {
         let line = Some(n + 1);
         let content = raw.split('#').next().unwrap_or("").trim();
@@ -73,56 +91,9 @@ pub fn parse_map_yaml(text: &str, path: &Path) -> Result<MapServerYaml, SimError
         };
         let key = key.trim();
         let value = value.trim().trim_matches('"').trim_matches('\'');
-        let num = |v: &str| {
-            v.parse::<f64>()
-                .ok()
-                .filter(|x| x.is_finite())
-                .ok_or_else(|| err(line, key, format!("{v:?} is not a number")))
-        };
-        match key {
-            "image" => image = Some(value.to_string()),
-            "resolution" => {
-                let r = num(value)?;
-                if r <= 0.0 {
-                    return Err(err(line, key, format!("{r} must be > 0")));
-                }
-                resolution = Some(r);
-            }
-            "origin" => {
-                let v = parse_num_list(value)
-                    .filter(|v| v.len() == 3 && v.iter().all(|x| x.is_finite()))
-                    .ok_or_else(|| err(line, key, format!("{value:?} is not [x, y, yaw]")))?;
-                if v[2] != 0.0 {
-                    tracing::warn!(file = %path.display(), yaw = v[2], "map origin yaw ignored");
-                }
-                origin = Some([v[0], v[1], v[2]]);
-            }
-            "negate" => {
-                negate = match value {
-                    "0" | "false" | "False" => false,
-                    "1" | "true" | "True" => true,
-                    _ => return Err(err(line, key, format!("{value:?} is not 0 or 1"))),
-                }
-            }
-            "occupied_thresh" => occ = num(value)?,
-            "free_thresh" => free = num(value)?,
-            "mode" => {
-                mode = match value {
-                    "trinary" => MapMode::Trinary,
-                    "scale" => MapMode::Scale,
-                    "raw" => MapMode::Raw,
-                    _ => {
-                        return Err(err(
-                            line,
-                            key,
-                            format!("{value:?} is not trinary, scale or raw"),
-                        ));
-                    }
-                }
-            }
-            _ => tracing::debug!(file = %path.display(), key, "unknown map_server key ignored"),
-        }
+        keys.set(key, value, line, path)?;
     }
+    let (occ, free) = (keys.occ, keys.free);
     if !(0.0..=1.0).contains(&occ) || !(0.0..=1.0).contains(&free) || free > occ {
         return Err(err(
             None,
@@ -131,14 +102,77 @@ pub fn parse_map_yaml(text: &str, path: &Path) -> Result<MapServerYaml, SimError
         ));
     }
     Ok(MapServerYaml {
-        image: image.ok_or_else(|| err(None, "image", "missing".into()))?,
-        resolution_m: resolution.ok_or_else(|| err(None, "resolution", "missing".into()))?,
-        origin: origin.ok_or_else(|| err(None, "origin", "missing".into()))?,
-        negate,
+        image: keys
+            .image
+            .ok_or_else(|| err(None, "image", "missing".into()))?,
+        resolution_m: keys
+            .resolution
+            .ok_or_else(|| err(None, "resolution", "missing".into()))?,
+        origin: keys
+            .origin
+            .ok_or_else(|| err(None, "origin", "missing".into()))?,
+        negate: keys.negate,
         occupied_thresh: occ,
         free_thresh: free,
-        mode,
+        mode: keys.mode,
     })
+}
+
+impl YamlKeys {
+    /// Reads `key: value` of line `line`; unknown keys are ignored (logged).
+    fn set(
+        &mut self,
+        key: &str,
+        value: &str,
+        line: Option<usize>,
+        path: &Path,
+    ) -> Result<(), SimError> {
+        let err = |message: String| yaml_err(path, line, key, message);
+        let num = |v: &str| {
+            v.parse::<f64>()
+                .ok()
+                .filter(|x| x.is_finite())
+                .ok_or_else(|| err(format!("{v:?} is not a number")))
+        };
+        match key {
+            "image" => self.image = Some(value.to_string()),
+            "resolution" => {
+                let r = num(value)?;
+                if r <= 0.0 {
+                    return Err(err(format!("{r} must be > 0")));
+                }
+                self.resolution = Some(r);
+            }
+            "origin" => {
+                let v = parse_num_list(value)
+                    .filter(|v| v.len() == 3 && v.iter().all(|x| x.is_finite()))
+                    .ok_or_else(|| err(format!("{value:?} is not [x, y, yaw]")))?;
+                if v[2] != 0.0 {
+                    tracing::warn!(file = %path.display(), yaw = v[2], "map origin yaw ignored");
+                }
+                self.origin = Some([v[0], v[1], v[2]]);
+            }
+            "negate" => {
+                self.negate = match value {
+                    "0" | "false" | "False" => false,
+                    "1" | "true" | "True" => true,
+                    _ => return Err(err(format!("{value:?} is not 0 or 1"))),
+                }
+            }
+            "occupied_thresh" => self.occ = num(value)?,
+            "free_thresh" => self.free = num(value)?,
+            "mode" => {
+                self.mode = match value {
+                    "trinary" => MapMode::Trinary,
+                    "scale" => MapMode::Scale,
+                    "raw" => MapMode::Raw,
+                    _ => return Err(err(format!("{value:?} is not trinary, scale or raw"))),
+                }
+            }
+            _ => tracing::debug!(file = %path.display(), key, "unknown map_server key ignored"),
+        }
+        Ok(())
+    }
 }
 
 impl MapServerYaml {

@@ -240,39 +240,12 @@ pub fn cast_scan<R: Rng + ?Sized>(
     // (several at once); with it, each ray's draws come in ray order as before.
     let mut ranges_m = vec![f64::INFINITY; n];
     if !angular {
-        let (inc_s, inc_c) = geometry.increment_rad.sin_cos();
-        let mut step_dir = [1.0, 0.0];
-        let dir = |i: usize| {
-            // Exact every 32 rays, rotated by the increment in between (error below 1e-14).
-            step_dir = if i.is_multiple_of(32) {
-                let (s, c) = (pose.theta_rad + geometry.bearing_rad(i)).sin_cos();
-                [c, s]
-            } else {
-                [
-                    step_dir[0] * inc_c - step_dir[1] * inc_s,
-                    step_dir[0] * inc_s + step_dir[1] * inc_c,
-                ]
-            };
-            step_dir
-        };
-        world.raycast_many(o, dir, max, &mut ranges_m);
+        cast_every_ray(world, pose, geometry, &mut ranges_m);
     }
-    let mut status = Vec::with_capacity(n);
-    if noise.is_off() {
-        // What the loop below does without noise, minus its branches.
-        let min = geometry.min_range_m;
-        for range in ranges_m.iter_mut() {
-            let (r, st) = if *range >= max {
-                (max, RayStatus::MaxRange)
-            } else if *range < min {
-                (f64::NAN, RayStatus::Error(TOO_NEAR_CODE))
-            } else {
-                (*range, RayStatus::Hit)
-            };
-            *range = r;
-            status.push(st);
-        }
+    let status = if noise.is_off() {
+        classify_noiseless(geometry, &mut ranges_m)
     } else {
+        let mut status = Vec::with_capacity(n);
         for (i, range) in ranges_m.iter_mut().enumerate() {
             let hit = if angular {
                 let a = pose.theta_rad
@@ -283,57 +256,116 @@ pub fn cast_scan<R: Rng + ?Sized>(
             } else {
                 *range
             };
-            let (mut r, mut st) = if hit < max {
-                (hit, RayStatus::Hit)
-            } else {
-                (max, RayStatus::MaxRange)
-            };
-            if st == RayStatus::Hit {
-                if r < geometry.min_range_m {
-                    st = RayStatus::Error(TOO_NEAR_CODE);
-                    r = f64::NAN;
-                } else {
-                    let e = match noise.combine {
-                        SigmaCombine::Max => {
-                            let sigma = noise.range_sigma_m.max(noise.range_sigma_prop * r);
-                            if sigma > 0.0 {
-                                sigma * normal(rng)
-                            } else {
-                                0.0
-                            }
-                        }
-                        SigmaCombine::Sum => {
-                            let mut e = 0.0;
-                            if noise.range_sigma_m > 0.0 {
-                                e += noise.range_sigma_m * normal(rng);
-                            }
-                            if noise.range_sigma_prop > 0.0 {
-                                e += noise.range_sigma_prop * r * normal(rng);
-                            }
-                            e
-                        }
-                    };
-                    r = (r + e).max(geometry.min_range_m);
-                    if r >= max {
-                        r = max;
-                        st = RayStatus::MaxRange;
-                    }
-                }
-            }
-            if noise.dropout_prob > 0.0 && rng.random::<f64>() < noise.dropout_prob {
-                st = RayStatus::Error(DROPOUT_CODE);
-                r = f64::NAN;
-            }
+            let (r, st) = noisy_reading(hit, geometry, noise, rng);
             *range = r;
             status.push(st);
         }
-    }
+        status
+    };
     Scan {
         ranges_m,
         status,
         intensities: None,
         sensor_time_ms: Some((host_time_s * 1000.0).round().max(0.0) as u64),
         host_time_s,
+    }
+}
+
+/// Casts every ray of `geometry` from `pose` without noise into `ranges_m` (infinite where
+/// nothing is hit within the maximum range).
+fn cast_every_ray(world: &World, pose: &Pose2, geometry: &ScanGeometry, ranges_m: &mut [f64]) {
+    let (inc_s, inc_c) = geometry.increment_rad.sin_cos();
+    let mut step_dir = [1.0, 0.0];
+    let dir = |i: usize| {
+        // Exact every 32 rays, rotated by the increment in between (error below 1e-14).
+        step_dir = if i.is_multiple_of(32) {
+            let (s, c) = (pose.theta_rad + geometry.bearing_rad(i)).sin_cos();
+            [c, s]
+        } else {
+            [
+                step_dir[0] * inc_c - step_dir[1] * inc_s,
+                step_dir[0] * inc_s + step_dir[1] * inc_c,
+            ]
+        };
+        step_dir
+    };
+    world.raycast_many([pose.x_m, pose.y_m], dir, geometry.max_range_m, ranges_m);
+}
+
+/// The readings of noise-free hits: what [`noisy_reading`] gives without noise, minus its
+/// branches; `ranges_m` become the ranges read.
+fn classify_noiseless(geometry: &ScanGeometry, ranges_m: &mut [f64]) -> Vec<RayStatus> {
+    let (min, max) = (geometry.min_range_m, geometry.max_range_m);
+    ranges_m
+        .iter_mut()
+        .map(|range| {
+            let (r, st) = if *range >= max {
+                (max, RayStatus::MaxRange)
+            } else if *range < min {
+                (f64::NAN, RayStatus::Error(TOO_NEAR_CODE))
+            } else {
+                (*range, RayStatus::Hit)
+            };
+            *range = r;
+            st
+        })
+        .collect()
+}
+
+/// The reading of a ray whose true hit is at `hit` (infinite: none), with range noise and
+/// dropouts drawn from `rng` in that order.
+fn noisy_reading<R: Rng + ?Sized>(
+    hit: f64,
+    geometry: &ScanGeometry,
+    noise: &LaserNoise,
+    rng: &mut R,
+) -> (f64, RayStatus) {
+    let max = geometry.max_range_m;
+    let (mut r, mut st) = if hit < max {
+        (hit, RayStatus::Hit)
+    } else {
+        (max, RayStatus::MaxRange)
+    };
+    if st == RayStatus::Hit {
+        if r < geometry.min_range_m {
+            st = RayStatus::Error(TOO_NEAR_CODE);
+            r = f64::NAN;
+        } else {
+            r = (r + range_error(noise, r, rng)).max(geometry.min_range_m);
+            if r >= max {
+                r = max;
+                st = RayStatus::MaxRange;
+            }
+        }
+    }
+    if noise.dropout_prob > 0.0 && rng.random::<f64>() < noise.dropout_prob {
+        st = RayStatus::Error(DROPOUT_CODE);
+        r = f64::NAN;
+    }
+    (r, st)
+}
+
+/// The range error of a hit at `r`, drawn from `rng` as `noise` combines its sigmas.
+fn range_error<R: Rng + ?Sized>(noise: &LaserNoise, r: f64, rng: &mut R) -> f64 {
+    match noise.combine {
+        SigmaCombine::Max => {
+            let sigma = noise.range_sigma_m.max(noise.range_sigma_prop * r);
+            if sigma > 0.0 {
+                sigma * normal(rng)
+            } else {
+                0.0
+            }
+        }
+        SigmaCombine::Sum => {
+            let mut e = 0.0;
+            if noise.range_sigma_m > 0.0 {
+                e += noise.range_sigma_m * normal(rng);
+            }
+            if noise.range_sigma_prop > 0.0 {
+                e += noise.range_sigma_prop * r * normal(rng);
+            }
+            e
+        }
     }
 }
 

@@ -5,7 +5,8 @@
 //! constant-velocity prediction, refined by the point-to-line ICP of `localiser`. It never
 //! reads odometry: the laser alone decides where the robot is. A scan that cannot be placed is
 //! reported as [`Placement::Skipped`], never placed silently. [`eval`] measures a trajectory
-//! against reference poses.
+//! against reference poses; [`LogRun`] runs the front end over a log's scans and reports on
+//! the run ([`SlamReport`]).
 #![warn(missing_docs)]
 
 mod correlative;
@@ -13,6 +14,8 @@ mod error;
 pub mod eval;
 mod frontend;
 mod grid;
+mod log_run;
 
 pub use error::SlamError;
 pub use frontend::{FrontEnd, FrontEndParams, Placement, SkipReason};
+pub use log_run::{Evaluation, LogRun, Placed, Skip, SlamReport, SlamRun};

@@ -119,8 +119,8 @@ pub fn run_to<W: Write>(args: &ReplayArgs, out: &mut W) -> anyhow::Result<()> {
 /// `robot-app replay FILE --loop`: the recorded scans through the loop; fails if the legs
 /// differ from the recorded ones.
 fn run_loop<W: Write>(args: &ReplayArgs, out: &mut W) -> anyhow::Result<()> {
-    use crate::record::{RunSettings, leg_summaries, read_recorded_legs, replay_loop};
-    let settings = RunSettings::read(&args.file)?;
+    use crate::record::{leg_summaries, read_settings, replay_loop};
+    let settings = read_settings(&args.file)?;
     let replay = replay_loop(&args.file, &settings.config, settings.start, settings.goal)?;
     let o = &replay.run.outcome;
     let log = &replay.run.log;
@@ -144,7 +144,7 @@ fn run_loop<W: Write>(args: &ReplayArgs, out: &mut W) -> anyhow::Result<()> {
             .to_png(&dir.join("map.png"))
             .with_context(|| format!("writing map.png in {}", dir.display()))?;
     }
-    let Some((reason, recorded)) = read_recorded_legs(&args.file)? else {
+    let Some((reason, recorded)) = scan_log::read_recorded_legs(&args.file)? else {
         writeln!(out, "the recording holds no legs to compare with")?;
         out.flush()?;
         return Ok(());

@@ -4,10 +4,9 @@ use std::time::Instant;
 
 use anyhow::{Context, bail};
 use clap::Args;
-use scan_types::{LaserSource, Pose2, Scan};
+use scan_types::{LaserSource, Pose2, Scan, WorldPoint};
 
 use super::sim::thread_cpu_time_s;
-use crate::base::open_base;
 use crate::outputs::{Reason, Summary};
 use crate::runloop::run_loop;
 
@@ -31,6 +30,17 @@ pub struct RunArgs {
     pub options: super::LoopOptions,
 }
 
+/// Opens the base named by `--base SPEC` ([`robot_base::open_base`]).
+pub fn open_base(spec: &str) -> anyhow::Result<robot_base::DynBase> {
+    robot_base::open_base(spec).map_err(|e| {
+        let e = anyhow::Error::new(e);
+        match e.downcast_ref::<robot_base::BaseError>() {
+            Some(b) if b.is_spec_error() => anyhow::anyhow!("--base {e:#}"),
+            _ => e,
+        }
+    })
+}
+
 /// Runs `robot-app run`.
 pub fn run(args: RunArgs) -> anyhow::Result<()> {
     let config = args.options.prepare()?;
@@ -44,13 +54,15 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
         .with_context(|| format!("cannot connect to the Hokuyo on {}", args.port))?;
     tracing::info!(port = %args.port, rays = laser.geometry().ray_count, "sensor connected");
     let geometry = *laser.geometry();
-    let mut recorder = match &args.options.record {
-        Some(p) => Some(
+    let mut recorder = args
+        .options
+        .record
+        .as_deref()
+        .map(|p| {
             crate::record::Recorder::create(p, &geometry)
-                .with_context(|| format!("cannot record to {}", p.display()))?,
-        ),
-        None => None,
-    };
+                .with_context(|| format!("cannot record to {}", p.display()))
+        })
+        .transpose()?;
     let mut record_error: Option<String> = None;
     let mut hook = |scan: &Scan, _: &Pose2| {
         if let Some(r) = recorder.as_mut()
@@ -76,27 +88,7 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
     if let Some(r) = recorder {
         r.finish().context("finishing the recording")?;
     }
-    let deg = |p: &Pose2| [p.x_m, p.y_m, p.theta_rad.to_degrees()];
-    let summary = Summary {
-        reached: outcome.reason == Reason::Reached,
-        reason: outcome.reason,
-        legs: outcome.legs_driven,
-        scans: outcome.scans,
-        collisions: 0,
-        path_length_m: outcome.path_length_m,
-        final_position_error_m: None,
-        final_heading_error_deg: None,
-        ate_rmse_m: None,
-        goal_distance_m: None,
-        cpu_time_s: cpu,
-        method: config.method.to_string(),
-        seed: None,
-        start: deg(&start),
-        goal: [goal.x_m(), goal.y_m()],
-        final_estimate: deg(&outcome.estimate),
-        final_truth: None,
-        note: outcome.note.clone(),
-    };
+    let summary = summary_of(&outcome, &config, (start, goal), cpu);
     let run = super::sim::SimRun {
         summary,
         outcome,
@@ -119,4 +111,34 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
         );
     }
     Ok(())
+}
+
+/// The `summary.json` of a run on a real robot (no truth: no errors, no collisions).
+fn summary_of(
+    outcome: &navigator::Outcome,
+    config: &crate::config::Params,
+    (start, goal): (Pose2, WorldPoint),
+    cpu_time_s: f64,
+) -> Summary {
+    let deg = |p: &Pose2| [p.x_m, p.y_m, p.theta_rad.to_degrees()];
+    Summary {
+        reached: outcome.reason == Reason::Reached,
+        reason: outcome.reason,
+        legs: outcome.legs_driven,
+        scans: outcome.scans,
+        collisions: 0,
+        path_length_m: outcome.path_length_m,
+        final_position_error_m: None,
+        final_heading_error_deg: None,
+        ate_rmse_m: None,
+        goal_distance_m: None,
+        cpu_time_s,
+        method: config.method.to_string(),
+        seed: None,
+        start: deg(&start),
+        goal: [goal.x_m(), goal.y_m()],
+        final_estimate: deg(&outcome.estimate),
+        final_truth: None,
+        note: outcome.note.clone(),
+    }
 }

@@ -262,8 +262,8 @@ pub fn run(args: SimArgs) -> anyhow::Result<()> {
 }
 
 /// Runs `spec` recording every scan with its true pose and the navigator's estimate to
-/// `path` (MCAP), with the run's settings ([`crate::record::RUN_METADATA`]) and the legs it
-/// drove ([`crate::record::LEGS_METADATA`]), so `robot-app replay FILE --loop` can repeat it.
+/// `path` (MCAP), with the run's settings ([`scan_log::RUN_METADATA`]) and the legs it
+/// drove ([`scan_log::LEGS_METADATA`]), so `robot-app replay FILE --loop` can repeat it.
 pub fn record_run(spec: &SimSpec, path: &Path) -> anyhow::Result<SimRun> {
     let setup = &spec.setup;
     let geometry = setup.sensor.geometry();
@@ -278,7 +278,7 @@ pub fn record_run(spec: &SimSpec, path: &Path) -> anyhow::Result<SimRun> {
         seed: setup.seed,
         noise: setup.noise,
     };
-    recorder.write_metadata(crate::record::RUN_METADATA, &settings.to_metadata())?;
+    recorder.write_metadata(scan_log::RUN_METADATA, &settings.to_metadata())?;
     let mut err: Option<anyhow::Error> = None;
     let mut hook = |scan: &scan_types::Scan, truth: Pose2, estimate: Pose2| {
         if err.is_none()

@@ -179,16 +179,3 @@ fn row_of(job: &Job, run: SimRun) -> BatchRow {
         note: s.note,
     }
 }
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn seeds_parse() {
-        assert_eq!(parse_seeds("0..50").unwrap(), 0..50);
-        assert_eq!(parse_seeds("7").unwrap(), 7..8);
-        assert!(parse_seeds("5..5").is_err());
-        assert!(parse_seeds("a..b").is_err());
-    }
-}

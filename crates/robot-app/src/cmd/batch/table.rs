@@ -82,11 +82,13 @@ pub struct Aggregate {
     pub reasons: std::collections::BTreeMap<String, usize>,
 }
 
-fn median(v: &mut [f64]) -> f64 {
+/// The median of `v` (sorted in place); NaN when empty.
+pub fn median(v: &mut [f64]) -> f64 {
     percentile(v, 0.5)
 }
 
-fn percentile(v: &mut [f64], q: f64) -> f64 {
+/// The `q` quantile of `v` (sorted in place), interpolated between ranks; NaN when empty.
+pub fn percentile(v: &mut [f64], q: f64) -> f64 {
     if v.is_empty() {
         return f64::NAN;
     }
@@ -196,67 +198,4 @@ pub fn table(aggs: &[Aggregate]) -> String {
         );
     }
     s
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn percentiles_by_hand() {
-        let mut v = vec![4.0, 1.0, 3.0, 2.0];
-        assert_eq!(median(&mut v), 2.5);
-        let mut v = vec![0.0, 10.0];
-        assert!((percentile(&mut v, 0.9) - 9.0).abs() < 1e-12);
-        assert!(median(&mut []).is_nan());
-    }
-
-    fn row(group: &str, reached: bool, err: f64) -> BatchRow {
-        BatchRow {
-            group: group.into(),
-            kind: WorldKind::Paper,
-            world: "w".into(),
-            pair: None,
-            method: "goalseek".into(),
-            seed: 0,
-            start: [0.0; 3],
-            goal: [0.0; 2],
-            reached,
-            reason: if reached {
-                Reason::Reached
-            } else {
-                Reason::LegLimit
-            },
-            legs: 3,
-            scans: 10,
-            collisions: 0,
-            final_position_error_m: Some(err),
-            final_heading_error_deg: Some(0.0),
-            ate_rmse_m: Some(err),
-            goal_distance_m: Some(0.1),
-            path_length_m: 1.0,
-            cpu_time_s: 0.1,
-            note: String::new(),
-        }
-    }
-
-    #[test]
-    fn aggregates_per_group() {
-        let rows = vec![
-            row("a", true, 0.01),
-            row("a", false, 0.03),
-            row("b", true, 0.5),
-            row("a", true, 0.02),
-        ];
-        let a = aggregate(&rows);
-        assert_eq!(a.len(), 2);
-        assert_eq!((a[0].group.as_str(), a[0].runs, a[0].reached), ("a", 3, 2));
-        assert!((a[0].success_pct - 200.0 / 3.0).abs() < 1e-9);
-        assert!((a[0].median_final_error_m - 0.02).abs() < 1e-12);
-        assert_eq!(a[0].reasons["leg_limit"], 1);
-        let t = table(&a);
-        assert!(t.lines().count() == 3);
-        // The kind column is padded: "paper" then three spaces before the method.
-        assert!(t.contains("paper    goalseek"), "{t}");
-    }
 }

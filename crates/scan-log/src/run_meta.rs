@@ -1,0 +1,152 @@
+//! The metadata a recording of a simulated run carries: the run's settings, so a replay through
+//! the loop can repeat it, and the legs it drove, so the replay can be compared with them.
+//! Values are JSON text (floats round-trip exactly) in MCAP metadata records.
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use scan_types::{Pose2, WorldPoint};
+use serde::Serialize;
+use serde::de::DeserializeOwned;
+
+use crate::{LogError, read_mcap_metadata};
+
+/// Name of the MCAP metadata record with the settings of a recorded simulated run.
+pub const RUN_METADATA: &str = "goalseek.run";
+/// Name of the MCAP metadata record with the legs a recorded run drove.
+pub const LEGS_METADATA: &str = "goalseek.legs";
+
+/// The settings of a recorded run, `C` being the loop's tuning: what a replay needs to repeat it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RunSettings<C> {
+    /// Start pose (the estimate's origin).
+    pub start: Pose2,
+    /// Target.
+    pub goal: WorldPoint,
+    /// Tuning of the loop.
+    pub config: C,
+    /// World name (information only).
+    pub world: String,
+    /// Sensor preset name (information only).
+    pub sensor: String,
+    /// Noise seed (information only).
+    pub seed: u64,
+    /// Noise on (information only).
+    pub noise: bool,
+}
+
+fn json_of<T: Serialize>(v: &T) -> String {
+    serde_json::to_string(v).expect("plain data serialises")
+}
+
+fn json_field<T: DeserializeOwned>(m: &BTreeMap<String, String>, key: &str) -> Result<T, LogError> {
+    let text = m.get(key).ok_or_else(|| LogError::Metadata {
+        context: format!("metadata '{RUN_METADATA}' has no '{key}'"),
+        source: None,
+    })?;
+    serde_json::from_str(text).map_err(|e| LogError::Metadata {
+        context: format!("metadata '{RUN_METADATA}': '{key}' = {text:?}"),
+        source: Some(e),
+    })
+}
+
+/// The first metadata record of the recording at `path` named `name`, if any.
+fn find_metadata(path: &Path, name: &str) -> Result<Option<BTreeMap<String, String>>, LogError> {
+    let meta = read_mcap_metadata(path)?;
+    Ok(meta.into_iter().find(|(n, _)| n == name).map(|(_, m)| m))
+}
+
+/// `error` with `path` in front of its context.
+fn at(path: &Path, error: LogError) -> LogError {
+    match error {
+        LogError::Metadata { context, source } => LogError::Metadata {
+            context: format!("{}: {context}", path.display()),
+            source,
+        },
+        other => other,
+    }
+}
+
+impl<C: Serialize + DeserializeOwned> RunSettings<C> {
+    /// The settings as MCAP metadata ([`RUN_METADATA`]).
+    pub fn to_metadata(&self) -> BTreeMap<String, String> {
+        let p = self.start;
+        BTreeMap::from([
+            ("start".into(), json_of(&[p.x_m, p.y_m, p.theta_rad])),
+            ("goal".into(), json_of(&[self.goal.x_m(), self.goal.y_m()])),
+            ("config".into(), json_of(&self.config)),
+            ("world".into(), json_of(&self.world)),
+            ("sensor".into(), json_of(&self.sensor)),
+            ("seed".into(), json_of(&self.seed)),
+            ("noise".into(), json_of(&self.noise)),
+        ])
+    }
+
+    /// Reads the settings back from [`RunSettings::to_metadata`] (the tuning unvalidated).
+    pub fn from_metadata(m: &BTreeMap<String, String>) -> Result<Self, LogError> {
+        let [x_m, y_m, theta_rad]: [f64; 3] = json_field(m, "start")?;
+        let [gx, gy]: [f64; 2] = json_field(m, "goal")?;
+        Ok(Self {
+            start: Pose2 {
+                x_m,
+                y_m,
+                theta_rad,
+            },
+            goal: WorldPoint::new(gx, gy),
+            config: json_field(m, "config")?,
+            world: json_field(m, "world")?,
+            sensor: json_field(m, "sensor")?,
+            seed: json_field(m, "seed")?,
+            noise: json_field(m, "noise")?,
+        })
+    }
+
+    /// The settings stored in the recording at `path`.
+    pub fn read(path: &Path) -> Result<Self, LogError> {
+        let m = find_metadata(path, RUN_METADATA)?.ok_or_else(|| LogError::Metadata {
+            context: format!(
+                "{}: no '{RUN_METADATA}' metadata (not a recording of `robot-app sim --record`)",
+                path.display()
+            ),
+            source: None,
+        })?;
+        Self::from_metadata(&m).map_err(|e| at(path, e))
+    }
+}
+
+/// One leg as a run recorded it: where it ended by the estimate, its landmark and point B.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct LegSummary {
+    /// Leg number (0 = start).
+    pub leg: usize,
+    /// Estimate at the end of the leg: x, y, theta (rad).
+    pub estimate: [f64; 3],
+    /// The landmark the leg localised on (world frame by the estimate).
+    pub landmark: Option<[f64; 2]>,
+    /// Point B of the leg.
+    pub point_b: Option<[f64; 2]>,
+}
+
+/// The [`LEGS_METADATA`] record of a run that drove `legs` and ended for `reason`.
+pub fn legs_metadata(legs: &[LegSummary], reason: &str) -> BTreeMap<String, String> {
+    BTreeMap::from([
+        ("legs".to_string(), json_of(&legs)),
+        ("reason".to_string(), reason.to_string()),
+    ])
+}
+
+/// The end reason and the legs stored in the recording at `path`, if it stores them.
+pub fn read_recorded_legs(path: &Path) -> Result<Option<(String, Vec<LegSummary>)>, LogError> {
+    let Some(m) = find_metadata(path, LEGS_METADATA)? else {
+        return Ok(None);
+    };
+    let legs = m.get("legs").ok_or_else(|| LogError::Metadata {
+        context: format!("{}: '{LEGS_METADATA}' without 'legs'", path.display()),
+        source: None,
+    })?;
+    let legs = serde_json::from_str(legs).map_err(|e| LogError::Metadata {
+        context: format!("{}: '{LEGS_METADATA}' legs", path.display()),
+        source: Some(e),
+    })?;
+    Ok(Some((m.get("reason").cloned().unwrap_or_default(), legs)))
+}

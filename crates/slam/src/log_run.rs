@@ -1,0 +1,242 @@
+//! The front end over every scan of a log, and the run's report: placed and skipped scans, time
+//! per scan, path figures, map consistency and, when the log has reference poses (never shown
+//! to the front end), the errors against them.
+
+use std::time::Instant;
+
+use scan_types::{Pose2, Scan, ScanGeometry};
+use serde::Serialize;
+
+use crate::eval::{RelativeError, Stats, absolute_error, relative_error};
+use crate::{FrontEnd, FrontEndParams, Placement, SlamError};
+
+/// One placed scan.
+#[derive(Debug, Clone)]
+pub struct Placed {
+    /// Its time stamp, seconds (the log's, or the scan index).
+    pub time_s: f64,
+    /// The estimate.
+    pub pose: Pose2,
+    /// The log's reference pose, if it has one (never seen by the estimator).
+    pub reference: Option<Pose2>,
+    /// The scan.
+    pub scan: Scan,
+}
+
+/// A scan that was not placed.
+#[derive(Debug, Clone, Serialize)]
+pub struct Skip {
+    /// Its line (text logs) or sequence number (MCAP).
+    pub line: usize,
+    /// Why.
+    pub reason: String,
+}
+
+/// `slam.json`.
+#[derive(Debug, Clone, Serialize)]
+pub struct SlamReport {
+    /// The log.
+    pub log: String,
+    /// Scans read.
+    pub scans: usize,
+    /// Scans placed.
+    pub placed: usize,
+    /// Scans that could not be placed.
+    pub skipped: Vec<Skip>,
+    /// Malformed records of the log that were skipped while reading.
+    pub malformed_records: usize,
+    /// Where the time stamps come from: `log` or `scan_index`.
+    pub timestamps: String,
+    /// Front-end time per scan, milliseconds: median and 99th percentile.
+    pub time_per_scan_ms: [f64; 2],
+    /// Front-end time for the whole log, seconds.
+    pub total_time_s: f64,
+    /// Straight-line distance between the first and the last placed pose, metres.
+    pub start_to_end_m: f64,
+    /// Length of the estimated path, metres.
+    pub path_length_m: f64,
+    /// Share of the map's hit endpoints within one cell of an occupied cell.
+    pub map_consistency: f64,
+    /// Against the log's reference poses, when every placed scan has one.
+    pub evaluation: Option<Evaluation>,
+    /// The front end's parameters.
+    pub params: FrontEndParams,
+}
+
+/// Errors against the reference poses.
+#[derive(Debug, Clone, Serialize)]
+pub struct Evaluation {
+    /// Relations k to k+1.
+    pub relative_1: RelativeError,
+    /// Relations k to k+10.
+    pub relative_10: Option<RelativeError>,
+    /// Position error after an SE(2) alignment, metres.
+    pub absolute_m: Stats,
+}
+
+/// A finished run.
+pub struct SlamRun {
+    /// The log's geometry.
+    pub geometry: ScanGeometry,
+    /// Placed scans, in order.
+    pub placed: Vec<Placed>,
+    /// What `slam.json` holds.
+    pub report: SlamReport,
+}
+
+/// The front end fed one log's scans in order, collecting what [`SlamRun`] reports.
+pub struct LogRun {
+    fe: FrontEnd,
+    name: String,
+    geometry: ScanGeometry,
+    placed: Vec<Placed>,
+    skipped: Vec<Skip>,
+    times_ms: Vec<f64>,
+    scans: usize,
+    started: Instant,
+}
+
+impl LogRun {
+    /// A run over the log `name` (for messages and the report) of `geometry`, with `params`.
+    pub fn new(
+        name: &str,
+        geometry: ScanGeometry,
+        params: &FrontEndParams,
+    ) -> Result<Self, SlamError> {
+        Ok(Self {
+            fe: FrontEnd::new(params.clone())?,
+            name: name.to_string(),
+            geometry,
+            placed: Vec::new(),
+            skipped: Vec::new(),
+            times_ms: Vec::new(),
+            scans: 0,
+            started: Instant::now(),
+        })
+    }
+
+    /// Places the next scan of the log (its `line`, or sequence number); `reference` is the
+    /// log's pose of it, kept for evaluation only.
+    pub fn add(
+        &mut self,
+        line: usize,
+        geometry: &ScanGeometry,
+        scan: &Scan,
+        reference: Option<Pose2>,
+    ) {
+        self.scans += 1;
+        let t = Instant::now();
+        let placement = self.fe.add_scan(geometry, scan);
+        self.times_ms.push(t.elapsed().as_secs_f64() * 1e3);
+        match placement {
+            Placement::Placed { pose, .. } => self.placed.push(Placed {
+                time_s: scan.host_time_s,
+                pose,
+                reference,
+                scan: scan.clone(),
+            }),
+            Placement::Skipped { reason } => {
+                tracing::warn!("{} line {line}: scan not placed: {reason}", self.name);
+                self.skipped.push(Skip {
+                    line,
+                    reason: reason.to_string(),
+                });
+            }
+        }
+    }
+
+    /// Ends the run; `malformed_records` is the count of records the reader skipped.
+    pub fn finish(self, malformed_records: usize) -> SlamRun {
+        let total_time_s = self.started.elapsed().as_secs_f64();
+        let Self {
+            fe,
+            name,
+            geometry,
+            mut placed,
+            skipped,
+            mut times_ms,
+            scans,
+            ..
+        } = self;
+        let timestamps = fix_timestamps(&name, &mut placed);
+        let report = SlamReport {
+            log: name,
+            scans,
+            placed: placed.len(),
+            skipped,
+            malformed_records,
+            timestamps,
+            time_per_scan_ms: [
+                percentile(&mut times_ms, 0.5),
+                percentile(&mut times_ms, 0.99),
+            ],
+            total_time_s,
+            start_to_end_m: match (placed.first(), placed.last()) {
+                (Some(a), Some(b)) => a.pose.position().distance_m(&b.pose.position()),
+                _ => 0.0,
+            },
+            path_length_m: placed
+                .windows(2)
+                .map(|w| w[0].pose.position().distance_m(&w[1].pose.position()))
+                .sum(),
+            map_consistency: 0.0,
+            evaluation: evaluate(&placed),
+            params: fe.params().clone(),
+        };
+        SlamRun {
+            geometry,
+            placed,
+            report,
+        }
+    }
+}
+
+impl SlamRun {
+    /// The map of the placed scans at their estimates (rays up to `max_range_m`, no-return rays
+    /// left out); fills in the report's map consistency.
+    pub fn map(&mut self, resolution_m: f64, max_range_m: f64) -> localiser::OccupancyGrid {
+        let scans: Vec<(Pose2, Scan)> = self
+            .placed
+            .iter()
+            .map(|p| (p.pose, p.scan.clone()))
+            .collect();
+        let (grid, stats) =
+            localiser::build_map(&self.geometry, &scans, resolution_m, max_range_m, false);
+        self.report.map_consistency = stats.endpoint_fit();
+        grid
+    }
+}
+
+/// Keeps the log's time stamps when they are finite and increase; else the scan index.
+fn fix_timestamps(name: &str, placed: &mut [Placed]) -> String {
+    let increasing = placed.iter().all(|p| p.time_s.is_finite())
+        && placed.windows(2).all(|w| w[1].time_s > w[0].time_s);
+    if increasing {
+        return "log".into();
+    }
+    tracing::warn!(
+        "{name}: the time stamps are missing or do not increase; trajectory.tum uses the scan index"
+    );
+    for (i, p) in placed.iter_mut().enumerate() {
+        p.time_s = i as f64;
+    }
+    "scan_index".into()
+}
+
+fn percentile(v: &mut [f64], q: f64) -> f64 {
+    if v.is_empty() {
+        return 0.0;
+    }
+    v.sort_by(f64::total_cmp);
+    v[((v.len() - 1) as f64 * q).round() as usize]
+}
+
+fn evaluate(placed: &[Placed]) -> Option<Evaluation> {
+    let reference: Vec<Pose2> = placed.iter().map(|p| p.reference).collect::<Option<_>>()?;
+    let est: Vec<Pose2> = placed.iter().map(|p| p.pose).collect();
+    Some(Evaluation {
+        relative_1: relative_error(&est, &reference, 1).ok()?,
+        relative_10: relative_error(&est, &reference, 10).ok(),
+        absolute_m: absolute_error(&est, &reference).ok()?,
+    })
+}
