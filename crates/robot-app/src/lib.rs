@@ -2,6 +2,7 @@
 
 pub mod cmd;
 pub mod config;
+pub mod interrupt;
 pub mod logging;
 pub mod outputs;
 pub mod plot;

@@ -1,8 +1,11 @@
 //! Tracing setup shared by every command.
 
+use std::io::IsTerminal;
+
 use tracing_subscriber::EnvFilter;
 
-/// Installs a stderr tracing subscriber; `RUST_LOG` overrides the -v/-q level.
+/// Installs a stderr tracing subscriber (colours only on a terminal); `RUST_LOG` overrides the
+/// -v/-q level.
 pub fn init(verbose: u8, quiet: u8) {
     let level = match (i16::from(verbose) - i16::from(quiet)).clamp(-2, 2) {
         -2 => "off",
@@ -15,6 +18,7 @@ pub fn init(verbose: u8, quiet: u8) {
     let _ = tracing_subscriber::fmt()
         .with_env_filter(filter)
         .with_writer(std::io::stderr)
+        .with_ansi(std::io::stderr().is_terminal())
         .with_target(false)
         .try_init();
 }

@@ -50,6 +50,7 @@ enum Command {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     robot_app::logging::init(cli.verbose, cli.quiet);
+    robot_app::interrupt::install();
     let result = match cli.command {
         Command::Sim(a) => cmd::sim::run(a),
         Command::Run(a) => cmd::run::run(a),
@@ -66,13 +67,24 @@ fn main() -> ExitCode {
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
+        Err(e) if e.is::<robot_app::interrupt::Interrupted>() => {
+            ExitCode::from(robot_app::interrupt::EXIT_CODE)
+        }
+        Err(e) if is_broken_pipe(&e) => ExitCode::SUCCESS,
         Err(e) => {
-            // One line: the cause chain joined with ': '.
             #[allow(clippy::print_stderr)]
             {
-                eprintln!("robot-app: {e:#}");
+                eprintln!("robot-app: {}", robot_app::interrupt::one_line(&e));
             }
             ExitCode::FAILURE
         }
     }
+}
+
+/// True when the error is a bare write to a closed stdout (`robot-app ... | head`): command-line
+/// tools exit quietly then. A device's broken pipe comes wrapped in its crate's error.
+fn is_broken_pipe(e: &anyhow::Error) -> bool {
+    e.chain().count() == 1
+        && e.downcast_ref::<std::io::Error>()
+            .is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe)
 }

@@ -383,9 +383,14 @@ pub struct ReconnectingUrg<T, F> {
 impl<T: Read + Write, F: FnMut() -> io::Result<T>> ReconnectingUrg<T, F> {
     /// Opens and connects (with backoff).
     pub fn new(mut open: F, config: UrgConfig, backoff: Backoff) -> Result<Self, UrgError> {
-        let mut urg = connect_with_backoff(&mut open, &config, &backoff)?;
+        let urg = connect_with_backoff(&mut open, &config, &backoff)?;
+        Ok(Self::from_connected(urg, open, config, backoff))
+    }
+
+    /// Wraps a connected driver; `open` reopens its device after an unplug.
+    pub fn from_connected(mut urg: Urg<T>, open: F, config: UrgConfig, backoff: Backoff) -> Self {
         let serial = serial_of(&mut urg);
-        Ok(ReconnectingUrg {
+        ReconnectingUrg {
             serial,
             params: urg.params().clone(),
             geometry: *LaserSource::geometry(&urg),
@@ -394,7 +399,7 @@ impl<T: Read + Write, F: FnMut() -> io::Result<T>> ReconnectingUrg<T, F> {
             config,
             backoff,
             reconnects: 0,
-        })
+        }
     }
 
     /// How many times the device was reconnected.
@@ -472,6 +477,23 @@ pub fn open_serial(path: &str) -> io::Result<SerialTransport> {
         .timeout(Duration::from_millis(20))
         .open()
         .map_err(io::Error::from)
+}
+
+/// How a [`SerialUrg`] reopens its device.
+pub type SerialOpener = Box<dyn FnMut() -> io::Result<SerialTransport> + Send>;
+
+/// A sensor on a serial device that survives unplugging.
+pub type SerialUrg = ReconnectingUrg<SerialTransport, SerialOpener>;
+
+impl SerialUrg {
+    /// Opens the serial device at `path` and connects (failing at once if it is not there),
+    /// then reconnects to the same path with `backoff` whenever it disappears.
+    pub fn open_path(path: &str, config: UrgConfig, backoff: Backoff) -> Result<Self, UrgError> {
+        let urg = Urg::open(path, config)?;
+        let owned = path.to_string();
+        let open: SerialOpener = Box::new(move || open_serial(&owned));
+        Ok(Self::from_connected(urg, open, config, backoff))
+    }
 }
 
 impl Urg<SerialTransport> {

@@ -47,8 +47,8 @@ pub mod time;
 
 pub use codec::{Command, DataKind, RawScan, ScanRequest, Status, StreamRequest, TimeCode};
 pub use driver::{
-    AcquisitionMode, Backoff, ReconnectingUrg, SerialTransport, Urg, UrgConfig,
-    connect_with_backoff, host_now_s, open_serial,
+    AcquisitionMode, Backoff, ReconnectingUrg, SerialOpener, SerialTransport, SerialUrg, Urg,
+    UrgConfig, connect_with_backoff, host_now_s, open_serial,
 };
 #[cfg(feature = "emulator")]
 pub use emulator::{

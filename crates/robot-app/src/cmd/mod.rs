@@ -65,3 +65,21 @@ pub fn reader_gone_is_ok(result: anyhow::Result<()>) -> anyhow::Result<()> {
         other => other,
     }
 }
+
+/// Reconnection of a Hokuyo that disappears mid-run: 0.1 s doubling to 2 s, for about 30 s.
+pub const RECONNECT: urg_driver::Backoff = urg_driver::Backoff {
+    initial: std::time::Duration::from_millis(100),
+    max: std::time::Duration::from_secs(2),
+    factor: 2.0,
+    max_attempts: Some(20),
+};
+
+/// Opens the Hokuyo at `port` so that it survives being unplugged ([`RECONNECT`]).
+pub fn open_sensor(
+    port: &str,
+    config: urg_driver::UrgConfig,
+) -> anyhow::Result<urg_driver::SerialUrg> {
+    use anyhow::Context;
+    urg_driver::SerialUrg::open_path(port, config, RECONNECT)
+        .with_context(|| format!("cannot connect to the Hokuyo on {port}"))
+}

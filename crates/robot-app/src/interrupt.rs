@@ -1,0 +1,62 @@
+//! Ctrl-C, SIGTERM and SIGHUP: the first asks the running command to stop cleanly (stop the
+//! base, finish the recording, write every output with reason `interrupted`); the program
+//! then exits with [`EXIT_CODE`].
+
+use std::sync::atomic::{AtomicBool, Ordering};
+
+/// Exit status of an interrupted command (128 + SIGINT), as shells expect.
+pub const EXIT_CODE: u8 = 130;
+
+static REQUESTED: AtomicBool = AtomicBool::new(false);
+
+/// Installs the handler; a second signal while stopping is only logged, so that the base
+/// still gets its `stop`.
+pub fn install() {
+    let installed = ctrlc::set_handler(|| {
+        if REQUESTED.swap(true, Ordering::SeqCst) {
+            tracing::warn!("already stopping: the base is being stopped and outputs written");
+        } else {
+            tracing::warn!("interrupted: stopping the base and writing the outputs");
+        }
+    });
+    if let Err(e) = installed {
+        tracing::warn!("Ctrl-C will not stop runs cleanly: {e}");
+    }
+}
+
+/// True once a stop was asked for.
+pub fn requested() -> bool {
+    REQUESTED.load(Ordering::SeqCst)
+}
+
+/// Asks for a stop as a signal would (tests, and a sensor source that gives up).
+pub fn request() {
+    REQUESTED.store(true, Ordering::SeqCst);
+}
+
+/// The error a command returns when it stopped because of a signal, after writing its
+/// outputs; `main` turns it into [`EXIT_CODE`].
+#[derive(Debug)]
+pub struct Interrupted;
+
+impl std::fmt::Display for Interrupted {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("interrupted")
+    }
+}
+
+impl std::error::Error for Interrupted {}
+
+/// One line for an error: its causes joined with ': ', each said once (an I/O error wrapped
+/// by a crate's error often repeats its cause's text).
+pub fn one_line(e: &anyhow::Error) -> String {
+    let mut parts: Vec<String> = Vec::new();
+    for cause in e.chain() {
+        let text = cause.to_string();
+        if parts.last().is_some_and(|p| p.ends_with(&text)) {
+            continue;
+        }
+        parts.push(text);
+    }
+    parts.join(": ")
+}
