@@ -36,6 +36,9 @@ pub struct GridParams {
     /// The grid never grows wider or taller than this, metres: a scan that would need more
     /// (a wild pose or range) is skipped.
     pub max_extent_m: f64,
+    /// The grid never holds more cells than this (memory: 4 bytes a cell): a scan that would
+    /// need more is skipped.
+    pub max_cells: usize,
 }
 
 impl GridParams {
@@ -49,6 +52,7 @@ impl GridParams {
             occupied_log_odds: 0.4,
             free_threshold_log_odds: -0.4,
             max_extent_m: 2000.0,
+            max_cells: 1 << 25,
         }
     }
 }
@@ -272,7 +276,7 @@ impl OccupancyGrid {
     /// free, the cell of a hit more occupied; max-range rays only free; error rays nothing.
     ///
     /// Returns false (and changes nothing) for a non-finite pose, a scan without usable rays,
-    /// or one that would grow the grid beyond `max_extent_m`.
+    /// or one that would grow the grid beyond `max_extent_m` or `max_cells`.
     pub fn integrate(&mut self, pose: &Pose2, geometry: &ScanGeometry, scan: &Scan) -> bool {
         if !(pose.x_m.is_finite() && pose.y_m.is_finite() && pose.theta_rad.is_finite()) {
             tracing::warn!(?pose, "occupancy grid: non-finite pose, scan skipped");
@@ -316,10 +320,13 @@ impl OccupancyGrid {
         }
         let max_cells = (self.params.max_extent_m / self.params.resolution_m).ceil();
         let span = (hi.0.saturating_sub(lo.0)).max(hi.1.saturating_sub(lo.1)) as f64;
-        if span + 1.0 > max_cells {
+        let area =
+            (hi.0.saturating_sub(lo.0) as f64 + 33.0) * (hi.1.saturating_sub(lo.1) as f64 + 33.0);
+        if span + 1.0 > max_cells || area > self.params.max_cells as f64 {
             tracing::warn!(
                 ?pose,
                 max_extent_m = self.params.max_extent_m,
+                max_cells = self.params.max_cells,
                 "occupancy grid: scan would grow the map too far, skipped"
             );
             return false;

@@ -14,8 +14,10 @@ const SIDE_RAD: f64 = std::f64::consts::FRAC_PI_2;
 const PARTIAL_SHARES: [f64; 4] = [0.0, 0.25, 0.5, 0.75];
 /// Partial shares are tried from this much commanded travel on, metres.
 const PARTIAL_MIN_M: f64 = 0.1;
-/// A match explains a scan when it pairs at least this share of its hits.
-const EXPLAINED_SHARE: f64 = 0.6;
+/// The laser disagrees with the commands when the match lands this many prior sigmas off.
+const DISAGREE_SIGMAS: f64 = 3.0;
+/// A partial-travel match with nothing to compare with must pair this share of the hits.
+const ALONE_SHARE: f64 = 0.5;
 /// A match leaves the travel to the laser when its worst direction is known this well, metres.
 const CONSTRAINED_SIGMA_M: f64 = 0.05;
 
@@ -202,8 +204,12 @@ fn matched(
     };
     let mut best = target.align(&nav.geometry, scan, guess, &prior);
     let hits = scan.robot_hits(&nav.geometry).count();
-    let explains = |m: &localiser::ScanMatch| m.pairs as f64 >= EXPLAINED_SHARE * hits as f64;
-    if ahead_m.abs() >= PARTIAL_MIN_M && !best.as_ref().is_some_and(explains) {
+    // The laser disagrees with the commands when the match, pulled toward them by the prior,
+    // still lands several prior sigmas away (or fails).
+    let disagrees = best
+        .as_ref()
+        .is_none_or(|m| (m.pose.x_m - ahead_m).abs() > DISAGREE_SIGMAS * prior.prior_sigma_m);
+    if ahead_m.abs() >= PARTIAL_MIN_M && disagrees {
         // The commands do not explain the scan: try partial travel, a hypothesis of the
         // laser's, without pull toward the commands.
         let loose = MatchParams {
@@ -213,7 +219,7 @@ fn matched(
         for share in PARTIAL_SHARES {
             let seed = Pose2::new(share * ahead_m, 0.0, 0.0);
             if let Some(m) = target.align(&nav.geometry, scan, seed, &loose)
-                && explains(&m)
+                && (best.is_some() || m.pairs as f64 >= ALONE_SHARE * hits as f64)
                 && fits_better(&m, best.as_ref())
             {
                 best = Some(m);

@@ -24,6 +24,9 @@ pub enum Reason {
     BaseStalled,
     /// The operator stopped the run (Ctrl-C, SIGTERM; reported by the caller).
     Interrupted,
+    /// The estimate reached the target but the robot is not there: set by an evaluator that
+    /// knows the truth (a simulator); the navigator never ends with it.
+    FalseArrival,
 }
 
 impl std::fmt::Display for Reason {
@@ -37,6 +40,7 @@ impl std::fmt::Display for Reason {
             Reason::BaseFailure => "base_failure",
             Reason::BaseStalled => "base_stalled",
             Reason::Interrupted => "interrupted",
+            Reason::FalseArrival => "false_arrival",
         })
     }
 }

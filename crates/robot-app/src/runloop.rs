@@ -50,6 +50,9 @@ impl Monitor for Watch<'_> {
     fn leg(&mut self, _leg: &Leg) {
         self.truths.push(self.eval.map(|e| e.true_pose()));
     }
+    fn interrupted(&mut self) -> Option<String> {
+        crate::interrupt::requested().then(|| "stopped by a signal (Ctrl-C or SIGTERM)".into())
+    }
     fn collision(&mut self) -> Option<String> {
         let e = self.eval?;
         (e.collisions() > 0).then(|| {

@@ -135,6 +135,14 @@ impl SimSetup {
             lo.y_m(),
             hi.y_m()
         );
+        // Far coordinates in exponent form, so that a typo stays readable.
+        let m = |v: f64| {
+            if v.abs() < 1e6 {
+                format!("{v:.2}")
+            } else {
+                format!("{v:.3e}")
+            }
+        };
         let s = self.start;
         if !(s.x_m.is_finite() && s.y_m.is_finite() && s.theta_rad.is_finite()) {
             return bad(
@@ -146,8 +154,9 @@ impl SimSetup {
             return bad(
                 "start",
                 format!(
-                    "({:.2}, {:.2}) lies outside the world ({bounds})",
-                    s.x_m, s.y_m
+                    "({}, {}) lies outside the world ({bounds})",
+                    m(s.x_m),
+                    m(s.y_m)
                 ),
             );
         }
@@ -170,9 +179,9 @@ impl SimSetup {
             return bad(
                 "target",
                 format!(
-                    "({:.2}, {:.2}) lies outside the world ({bounds})",
-                    target.x_m(),
-                    target.y_m()
+                    "({}, {}) lies outside the world ({bounds})",
+                    m(target.x_m()),
+                    m(target.y_m())
                 ),
             );
         }

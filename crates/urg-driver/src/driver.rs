@@ -441,7 +441,7 @@ impl<T: Read + Write, F: FnMut() -> io::Result<T>> LaserSource for ReconnectingU
                     )));
                 }
                 self.reconnects += 1;
-                tracing::info!("sensor reconnected after {:?}", started.elapsed());
+                tracing::warn!("sensor reconnected after {:?}", started.elapsed());
                 self.urg = Some(urg);
             }
             let urg = self.urg.as_mut().expect("connected above");

@@ -41,18 +41,7 @@ pub struct MapArgs {
 
 /// Runs `robot-app map`.
 pub fn run(args: MapArgs) -> anyhow::Result<()> {
-    if !(args.resolution.is_finite() && args.resolution > 0.0) {
-        anyhow::bail!(
-            "--resolution {}: must be a positive number of metres",
-            args.resolution
-        );
-    }
-    if !(args.max_range.is_finite() && args.max_range > 0.0) {
-        anyhow::bail!(
-            "--max-range {}: must be a positive number of metres",
-            args.max_range
-        );
-    }
+    super::check_map_options(args.resolution, args.max_range)?;
     let mut source = crate::record::open_log(&args.log, None)?;
     let mut geometry = *source.geometry();
     if let Some(deg) = args.spread_deg {

@@ -83,3 +83,15 @@ pub fn open_sensor(
     urg_driver::SerialUrg::open_path(port, config, RECONNECT)
         .with_context(|| format!("cannot connect to the Hokuyo on {port}"))
 }
+
+/// Checks `--resolution` (0.01 to 1 m) and `--max-range` (above 0, at most 100 m) of the
+/// map-writing commands.
+pub fn check_map_options(resolution_m: f64, max_range_m: f64) -> anyhow::Result<()> {
+    if !(resolution_m.is_finite() && (0.01..=1.0).contains(&resolution_m)) {
+        anyhow::bail!("--resolution {resolution_m}: must be from 0.01 to 1 m");
+    }
+    if !(max_range_m.is_finite() && max_range_m > 0.0 && max_range_m <= 100.0) {
+        anyhow::bail!("--max-range {max_range_m}: must be above 0 and at most 100 m");
+    }
+    Ok(())
+}

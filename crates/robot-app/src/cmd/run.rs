@@ -50,8 +50,7 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
         None => Pose2::new(0.0, 0.0, 0.0),
     };
     let mut base = open_base(&args.base)?;
-    let mut laser = urg_driver::Urg::open(&args.port, urg_driver::UrgConfig::default())
-        .with_context(|| format!("cannot connect to the Hokuyo on {}", args.port))?;
+    let mut laser = super::open_sensor(&args.port, urg_driver::UrgConfig::default())?;
     tracing::info!(port = %args.port, rays = laser.geometry().ray_count, "sensor connected");
     let geometry = *laser.geometry();
     let mut recorder = args
@@ -84,7 +83,9 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
     )?;
     let outcome = run.outcome;
     let cpu = thread_cpu_time_s() - cpu0;
-    let _ = laser.stop();
+    if let Some(urg) = laser.urg_mut() {
+        let _ = urg.stop();
+    }
     if let Some(r) = recorder {
         r.finish().context("finishing the recording")?;
     }
@@ -102,6 +103,9 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
     );
     if let Some(e) = record_error {
         bail!("recording failed: {e}");
+    }
+    if run.summary.reason == Reason::Interrupted {
+        return Err(crate::interrupt::Interrupted.into());
     }
     if !run.summary.reached {
         bail!(

@@ -17,8 +17,9 @@ pub const SUCCESS_RADIUS_M: f64 = 0.3;
 /// Arguments of `robot-app sim`.
 #[derive(Debug, Args)]
 pub struct SimArgs {
-    /// World file (Stage .png needs a .yaml/.toml wrapper; map_server .yaml; native .toml).
-    /// Default: the paper's world.
+    /// World file: goalseek .toml (with its own start and target), map_server .yaml, or a
+    /// Stage .png (0.02 m per pixel; give another size in a .yaml or .toml beside it). Default:
+    /// the paper's world.
     #[arg(long, value_name = "PATH")]
     pub world: Option<PathBuf>,
     /// Start pose X,Y,THETA_DEG (default: the paper's -3.92,-4.26,45).
@@ -148,9 +149,11 @@ pub fn simulate_observed(
         .final_errors()
         .map_or((None, None), |(p, h)| (Some(p), Some(h)));
     let mut note = outcome.note.clone();
+    let mut reason = reason;
     if reason == Reason::Reached && !reached {
+        reason = Reason::FalseArrival;
         note = format!(
-            "false arrival: the estimate reached the target but the robot is {goal_distance:.2} m from it"
+            "the estimate reached the target but the robot is {goal_distance:.2} m from it"
         );
     }
     let summary = Summary {
@@ -209,17 +212,26 @@ pub fn run(args: SimArgs) -> anyhow::Result<()> {
         .sensor
         .parse::<SensorPreset>()
         .map_err(|e| anyhow::anyhow!("--sensor {}: {e}", args.sensor))?;
+    // A world file's own scenario unless the command line gives one.
+    let (file_start, file_goal) = match &args.world {
+        None => (paper_start(), paper_target()),
+        Some(p) => sim_laser::file_scenario(Some(p))
+            .with_context(|| format!("reading the scenario of {}", p.display()))?,
+    };
     setup.start = match &args.start {
         Some(s) => scan_types::parse_pose_deg(s).context("--start")?,
-        None => paper_start(),
+        None => file_start,
     };
     let goal = match &args.goal {
         Some(s) => scan_types::parse_point(s).context("--goal")?,
-        None => paper_target(),
+        None => file_goal,
     };
     setup.seed = args.seed;
     setup.noise = args.noise != "off";
     let spec = SimSpec::new(setup, goal, config);
+    spec.setup.check_scenario(goal).map_err(|e| {
+        anyhow::anyhow!("{e}; give a start and a goal in its free space with --start and --goal")
+    })?;
     let run = match &args.options.record {
         None => simulate(&spec, None)?,
         Some(path) => record_run(&spec, path)?,
@@ -250,6 +262,9 @@ pub fn run(args: SimArgs) -> anyhow::Result<()> {
             s.final_position_error_m.unwrap_or(f64::NAN),
             args.options.out.display()
         );
+    }
+    if s.reason == Reason::Interrupted {
+        return Err(crate::interrupt::Interrupted.into());
     }
     if !s.reached {
         bail!(

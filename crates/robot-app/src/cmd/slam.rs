@@ -132,14 +132,7 @@ pub fn write_outputs(
 
 /// Runs `robot-app slam`.
 pub fn run(args: SlamArgs) -> anyhow::Result<()> {
-    for (name, v) in [
-        ("--resolution", args.resolution),
-        ("--max-range", args.max_range),
-    ] {
-        if !(v.is_finite() && v > 0.0) {
-            anyhow::bail!("{name} {v}: must be a positive number of metres");
-        }
-    }
+    super::check_map_options(args.resolution, args.max_range)?;
     let params = load_params(args.config.as_deref())?;
     let mut run = run_log(&args.log, &params)?;
     write_outputs(&args.out, &mut run, args.resolution, args.max_range)?;

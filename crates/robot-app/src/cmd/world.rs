@@ -95,6 +95,10 @@ fn generate(a: GenerateArgs) -> anyhow::Result<()> {
     for seed in a.seed..a.seed.saturating_add(a.count.max(1)) {
         let path = PathBuf::from(template.replace("{seed}", &seed.to_string()));
         let desc = generate_world(seed, &params)?;
+        if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+            std::fs::create_dir_all(dir)
+                .with_context(|| format!("--out: cannot create {}", dir.display()))?;
+        }
         let ext = path
             .extension()
             .map(|e| e.to_string_lossy().to_ascii_lowercase())

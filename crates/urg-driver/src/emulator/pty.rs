@@ -75,7 +75,12 @@ struct Plugged {
 /// Opens a new pseudo-terminal and points `link` at it.
 fn plug_in(link: &std::path::Path) -> io::Result<Plugged> {
     use serialport::SerialPort;
-    let (mut master, slave) = serialport::TTYPort::pair().map_err(io::Error::from)?;
+    let (master0, slave0) = serialport::TTYPort::pair().map_err(io::Error::from)?;
+    // Close-on-exec copies: a child process started by this one must not keep the master
+    // open, or closing it would not hang up the terminal (no unplug seen).
+    let mut master = master0.try_clone_native().map_err(io::Error::from)?;
+    let slave = slave0.try_clone_native().map_err(io::Error::from)?;
+    drop((master0, slave0));
     let device = slave
         .name()
         .ok_or_else(|| io::Error::other("pseudo-terminal has no name"))?;

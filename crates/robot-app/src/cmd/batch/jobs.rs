@@ -63,6 +63,12 @@ pub fn build(args: &BatchArgs) -> anyhow::Result<Vec<Job>> {
         .iter()
         .map(|m| crate::config::load(args.config.as_deref(), Some(*m)))
         .collect::<anyhow::Result<_>>()?;
+    if !(args.min_distance.is_finite() && (0.0..=1000.0).contains(&args.min_distance)) {
+        anyhow::bail!(
+            "--min-distance {}: must be a distance from 0 to 1000 m",
+            args.min_distance
+        );
+    }
     let plan = Plan {
         own_scenario: args.scenarios != "pairs",
         pairs: args.scenarios != "paper",
@@ -75,7 +81,7 @@ pub fn build(args: &BatchArgs) -> anyhow::Result<Vec<Job>> {
         configs,
     };
     let mut jobs = Vec::new();
-    for mut w in worlds(args)? {
+    for mut w in worlds(args, &plan.configs)? {
         w.setup.sensor = sensor;
         world_jobs(&w, &plan, &mut jobs);
     }
@@ -83,7 +89,7 @@ pub fn build(args: &BatchArgs) -> anyhow::Result<Vec<Job>> {
 }
 
 /// The worlds named by `--worlds` (default: the paper's), then the generated ones.
-fn worlds(args: &BatchArgs) -> anyhow::Result<Vec<WorldEntry>> {
+fn worlds(args: &BatchArgs, configs: &[Params]) -> anyhow::Result<Vec<WorldEntry>> {
     let mut worlds: Vec<WorldEntry> = Vec::new();
     let names = if args.worlds.is_empty() && args.random_worlds == 0 && args.corridor_worlds == 0 {
         vec!["paper".to_string()]
@@ -100,12 +106,30 @@ fn worlds(args: &BatchArgs) -> anyhow::Result<Vec<WorldEntry>> {
             });
         } else {
             let p = Path::new(w);
+            let setup = SimSetup::load(Some(p))
+                .with_context(|| format!("cannot load world {}", p.display()))?;
+            // A goalseek world file's own start and target, when it has them.
+            let has_own = p
+                .extension()
+                .is_some_and(|e| e.eq_ignore_ascii_case("toml"));
+            let scenario = if has_own {
+                let (start, goal) = sim_laser::file_scenario(Some(p))
+                    .with_context(|| format!("reading the scenario of {}", p.display()))?;
+                let mut check = setup.clone();
+                check.start = start;
+                check.robot_radius_m = configs[0].robot.radius_m;
+                check
+                    .check_scenario(goal)
+                    .with_context(|| format!("the scenario of {}", p.display()))?;
+                Some((start, goal))
+            } else {
+                None
+            };
             worlds.push(WorldEntry {
-                setup: SimSetup::load(Some(p))
-                    .with_context(|| format!("cannot load world {}", p.display()))?,
+                setup,
                 kind: WorldKind::File,
                 index: 0,
-                scenario: None,
+                scenario,
             });
         }
     }

@@ -98,10 +98,20 @@ pub fn run(args: BatchArgs) -> anyhow::Result<()> {
     if jobs.is_empty() {
         bail!("nothing to run: no worlds, seeds or scenarios");
     }
+    // The output folder is checked before the first run, not after the last.
     std::fs::create_dir_all(&args.out)
-        .with_context(|| format!("cannot create {}", args.out.display()))?;
-    let rows = run_jobs(&jobs, &args)?;
+        .with_context(|| format!("--out: cannot create {}", args.out.display()))?;
+    let probe = args.out.join(".goalseek-write-test");
+    write_atomic(&probe, b"")
+        .with_context(|| format!("--out: cannot write into {}", args.out.display()))?;
+    let _ = std::fs::remove_file(&probe);
+    let (rows, failed) = run_jobs(&jobs, &args)?;
     let aggs = aggregate(&rows);
+    // The table is printed whatever happens next.
+    #[allow(clippy::print_stdout)]
+    {
+        print!("{}", table(&aggs));
+    }
     let file = BatchFile {
         command: std::env::args().collect::<Vec<_>>().join(" "),
         aggregates: &aggs,
@@ -112,14 +122,22 @@ pub fn run(args: BatchArgs) -> anyhow::Result<()> {
     write_atomic(&args.out.join("batch.json"), text.as_bytes())?;
     #[allow(clippy::print_stdout)]
     {
-        print!("{}", table(&aggs));
         println!("batch.json: {}", args.out.join("batch.json").display());
+    }
+    if let Some((n, first)) = failed {
+        return Err(first.context(format!("{n} of {} runs failed; the first", jobs.len())));
+    }
+    if crate::interrupt::requested() {
+        return Err(crate::interrupt::Interrupted.into());
     }
     Ok(())
 }
 
+/// Rows of the runs that finished, and how many failed with the first failure.
+type JobResults = (Vec<BatchRow>, Option<(usize, anyhow::Error)>);
+
 /// Runs every job on `--jobs` worker threads with a progress bar, rows in job order.
-fn run_jobs(jobs: &[Job], args: &BatchArgs) -> anyhow::Result<Vec<BatchRow>> {
+fn run_jobs(jobs: &[Job], args: &BatchArgs) -> anyhow::Result<JobResults> {
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(args.jobs.unwrap_or(0))
         .build()
@@ -150,7 +168,18 @@ fn run_jobs(jobs: &[Job], args: &BatchArgs) -> anyhow::Result<Vec<BatchRow>> {
             .collect()
     });
     bar.finish_and_clear();
-    rows.into_iter().collect()
+    let mut ok = Vec::with_capacity(rows.len());
+    let mut failed: Option<(usize, anyhow::Error)> = None;
+    for r in rows {
+        match r {
+            Ok(row) => ok.push(row),
+            Err(e) => match &mut failed {
+                Some((n, _)) => *n += 1,
+                None => failed = Some((1, e)),
+            },
+        }
+    }
+    Ok((ok, failed))
 }
 
 /// The batch.json row of a finished job.

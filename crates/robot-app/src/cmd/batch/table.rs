@@ -128,13 +128,7 @@ pub fn aggregate(rows: &[BatchRow]) -> Vec<Aggregate> {
             let mut cpu: Vec<f64> = sel.iter().map(|r| r.cpu_time_s).collect();
             let mut reasons = std::collections::BTreeMap::new();
             for r in &sel {
-                // The estimate said "reached" but the robot is not at the target.
-                let key = if r.reason == Reason::Reached && !r.reached {
-                    "false_arrival".to_string()
-                } else {
-                    r.reason.to_string()
-                };
-                *reasons.entry(key).or_insert(0) += 1;
+                *reasons.entry(r.reason.to_string()).or_insert(0) += 1;
             }
             Aggregate {
                 runs,

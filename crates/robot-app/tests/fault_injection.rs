@@ -1,0 +1,325 @@
+//! The whole loop under faults: the simulator casts the scans, the SCIP emulator serves them
+//! on a pseudo-terminal, `robot-app run` reads them through its driver, and this test is the
+//! robot base on the other end of `--base stdio`, moving the simulated robot. Each fault must
+//! end the run with its own reason, the base always gets `stop`, and every output is whole.
+
+use std::io::{BufRead, BufReader, Write};
+use std::path::Path;
+use std::process::{Child, ChildStdin, ChildStdout, Command, ExitStatus, Stdio};
+use std::sync::Arc;
+use std::time::Duration;
+
+use scan_types::{MotionBase, WorldPoint};
+use sim_laser::{BaseGains, SensorPreset, SimBase, Simulation, TruthHandle, World, paper_start};
+use urg_driver::{Fault, Model, Profile, PtyServer};
+
+/// A goal two legs from the paper's start (about 70 scans): quick over a 10 Hz sensor.
+const GOAL: (f64, f64) = (-1.0, -3.0);
+
+struct Harness {
+    child: Child,
+    to_app: ChildStdin,
+    from_app: BufReader<ChildStdout>,
+    base: SimBase,
+    truth: TruthHandle,
+    server: PtyServer,
+    out: tempfile::TempDir,
+    commands: usize,
+    stops: usize,
+}
+
+impl Harness {
+    fn start(gains: BaseGains, extra: &[&str]) -> Harness {
+        let preset = SensorPreset::Urg04lx;
+        let sim = Simulation::new(
+            Arc::new(World::paper()),
+            preset,
+            preset.default_noise(),
+            sim_laser::MotionNoise::default(),
+            0.3,
+            paper_start(),
+            3,
+        )
+        .with_base_gains(gains);
+        let (laser, base, truth) = sim.split();
+        let server = urg_driver::serve_pty(Profile::of(Model::Urg04lx), laser).expect("a pty");
+        let out = tempfile::tempdir().unwrap();
+        let start = paper_start();
+        let mut child = Command::new(env!("CARGO_BIN_EXE_robot-app"))
+            .arg("run")
+            .args(["--port", server.path()])
+            .arg(format!("--goal={},{}", GOAL.0, GOAL.1))
+            .arg(format!(
+                "--start={},{},{}",
+                start.x_m,
+                start.y_m,
+                start.theta_rad.to_degrees()
+            ))
+            .args(["--base", "stdio"])
+            .arg("--out")
+            .arg(out.path().join("run"))
+            .args(extra)
+            .env("RUST_LOG", "warn")
+            .stdin(Stdio::piped())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("robot-app starts");
+        let to_app = child.stdin.take().unwrap();
+        let from_app = BufReader::new(child.stdout.take().unwrap());
+        Harness {
+            child,
+            to_app,
+            from_app,
+            base,
+            truth,
+            server,
+            out,
+            commands: 0,
+            stops: 0,
+        }
+    }
+
+    /// Plays the base until robot-app closes its end; `fault` runs before each answer with
+    /// the number of motion commands so far.
+    fn drive(&mut self, mut fault: impl FnMut(usize, &Harness)) {
+        let mut line = String::new();
+        loop {
+            line.clear();
+            if self.from_app.read_line(&mut line).unwrap_or(0) == 0 {
+                break;
+            }
+            let cmd = line.trim();
+            let mut words = cmd.split_whitespace();
+            let answer = match (words.next(), words.next().map(str::parse::<f64>)) {
+                (Some("rotate"), Some(Ok(a))) => self.base.rotate(a).map(|()| "done"),
+                (Some("forward"), Some(Ok(d))) => self.base.forward(d).map(|()| "done"),
+                (Some("stop"), None) => {
+                    self.stops += 1;
+                    Ok("done")
+                }
+                _ => panic!("not a base command: {cmd:?}"),
+            }
+            .expect("the simulated base moves");
+            if cmd != "stop" {
+                self.commands += 1;
+                fault(self.commands, self);
+            }
+            // robot-app may have exited already after `stop`.
+            let _ = writeln!(self.to_app, "{answer}");
+            let _ = self.to_app.flush();
+        }
+    }
+
+    fn finish(mut self) -> Ended {
+        let status = self.child.wait().unwrap();
+        let mut stderr = String::new();
+        std::io::Read::read_to_string(self.child.stderr.as_mut().unwrap(), &mut stderr).unwrap();
+        let dir = self.out.path().join("run");
+        let summary = std::fs::read_to_string(dir.join("summary.json"))
+            .map(|t| serde_json::from_str::<serde_json::Value>(&t).expect("summary.json parses"));
+        let distance = self
+            .truth
+            .pose()
+            .position()
+            .distance_m(&WorldPoint::new(GOAL.0, GOAL.1));
+        self.server.stop();
+        Ended {
+            status,
+            stderr,
+            summary: summary.ok(),
+            stops: self.stops,
+            commands: self.commands,
+            true_distance_m: distance,
+            dir: self.out,
+        }
+    }
+}
+
+struct Ended {
+    status: ExitStatus,
+    stderr: String,
+    summary: Option<serde_json::Value>,
+    stops: usize,
+    commands: usize,
+    true_distance_m: f64,
+    dir: tempfile::TempDir,
+}
+
+impl Ended {
+    fn reason(&self) -> String {
+        let s = self.summary.as_ref().unwrap_or_else(|| {
+            panic!("no summary.json; stderr:\n{}", self.stderr);
+        });
+        s["reason"].as_str().unwrap().to_string()
+    }
+
+    /// The base got exactly one `stop`, and every output file is whole.
+    fn assert_clean_end(&self) {
+        assert_eq!(self.stops, 1, "stop sent once; stderr:\n{}", self.stderr);
+        let run = self.dir.path().join("run");
+        for f in [
+            "summary.json",
+            "trajectory.csv",
+            "map.pgm",
+            "map.yaml",
+            "map.png",
+        ] {
+            let p = run.join(f);
+            assert!(
+                p.metadata().is_ok_and(|m| m.len() > 0),
+                "{f} missing or empty"
+            );
+        }
+        assert_no_partial_files(&run);
+    }
+}
+
+fn assert_no_partial_files(dir: &Path) {
+    for e in std::fs::read_dir(dir).unwrap() {
+        let name = e.unwrap().file_name().to_string_lossy().into_owned();
+        assert!(
+            !name.ends_with(".partial") && !name.starts_with(".tmp"),
+            "half-written file left: {name}"
+        );
+    }
+}
+
+#[test]
+fn no_fault_reaches_the_goal() {
+    let mut h = Harness::start(BaseGains::default(), &[]);
+    h.drive(|_, _| {});
+    let end = h.finish();
+    assert!(end.status.success(), "stderr:\n{}", end.stderr);
+    assert_eq!(end.reason(), "reached");
+    assert!(
+        end.true_distance_m < 0.3,
+        "{} m from the goal",
+        end.true_distance_m
+    );
+    end.assert_clean_end();
+}
+
+#[test]
+fn unplug_and_replug_mid_leg_is_survived() {
+    let mut h = Harness::start(BaseGains::default(), &[]);
+    h.drive(|n, h| {
+        if n == 10 {
+            // Mid-leg: the sensor is gone for 2 s, then back behind the same path.
+            let ctl = h.server.control().clone();
+            ctl.unplug();
+            std::thread::spawn(move || {
+                std::thread::sleep(Duration::from_secs(2));
+                ctl.plug();
+            });
+        }
+    });
+    let end = h.finish();
+    assert!(end.status.success(), "stderr:\n{}", end.stderr);
+    assert_eq!(end.reason(), "reached");
+    assert!(
+        end.stderr.contains("reconnected"),
+        "stderr:\n{}",
+        end.stderr
+    );
+    end.assert_clean_end();
+}
+
+#[test]
+fn a_checksum_storm_is_ridden_out() {
+    let mut h = Harness::start(BaseGains::default(), &[]);
+    h.drive(|n, h| {
+        if n == 5 {
+            // Fewer in a row than the driver tolerates (10): each bad scan is dropped.
+            for _ in 0..6 {
+                h.server.control().inject(Fault::CorruptChecksum);
+            }
+        }
+    });
+    let end = h.finish();
+    assert!(end.status.success(), "stderr:\n{}", end.stderr);
+    assert_eq!(end.reason(), "reached");
+    end.assert_clean_end();
+}
+
+#[test]
+fn a_stalled_sensor_ends_as_sensor_failure() {
+    let mut h = Harness::start(BaseGains::default(), &[]);
+    h.drive(|n, h| {
+        if n == 5 {
+            h.server.control().set_stalled(true);
+        }
+    });
+    let end = h.finish();
+    assert!(!end.status.success());
+    assert_eq!(end.reason(), "sensor_failure");
+    end.assert_clean_end();
+}
+
+#[test]
+fn a_stalled_base_ends_as_base_stalled() {
+    let mut h = Harness::start(
+        BaseGains {
+            drive: 0.0,
+            turn: 1.0,
+        },
+        &[],
+    );
+    h.drive(|_, _| {});
+    let end = h.finish();
+    assert!(!end.status.success());
+    assert_eq!(end.reason(), "base_stalled");
+    end.assert_clean_end();
+}
+
+#[test]
+fn a_slipping_base_gives_no_false_arrival() {
+    let mut h = Harness::start(
+        BaseGains {
+            drive: 0.5,
+            turn: 1.0,
+        },
+        &[],
+    );
+    h.drive(|_, _| {});
+    let end = h.finish();
+    if end.reason() == "reached" {
+        // The goal tolerance (0.15 m) plus 0.1 m of localisation error.
+        assert!(
+            end.true_distance_m < 0.25,
+            "reached, but {} m away",
+            end.true_distance_m
+        );
+    }
+    end.assert_clean_end();
+}
+
+#[test]
+fn sigint_stops_the_base_writes_everything_and_exits_130() {
+    let rec = tempfile::tempdir().unwrap();
+    let rec_path = rec.path().join("rec.mcap");
+    let mut h = Harness::start(
+        BaseGains::default(),
+        &["--record", rec_path.to_str().unwrap()],
+    );
+    let pid = h.child.id().to_string();
+    h.drive(|n, _| {
+        if n == 8 {
+            let killed = Command::new("kill").args(["-INT", &pid]).status().unwrap();
+            assert!(killed.success());
+        }
+    });
+    let end = h.finish();
+    assert_eq!(end.status.code(), Some(130), "stderr:\n{}", end.stderr);
+    assert_eq!(end.reason(), "interrupted");
+    assert!(end.commands < 40, "it stopped soon after the signal");
+    end.assert_clean_end();
+    // The recording is finished, not left half-written.
+    let mut log = scan_log::open_log(&rec_path, None).expect("the recording opens");
+    let mut scans = 0;
+    while scan_types::LaserSource::next_scan(&mut log).is_ok() {
+        scans += 1;
+    }
+    assert!(scans > 0);
+    assert_no_partial_files(rec.path());
+}
