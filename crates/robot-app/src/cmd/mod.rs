@@ -42,14 +42,24 @@ impl LoopOptions {
     /// Loads the configuration, creates the output folder and writes the configuration used
     /// into it as `config.toml`.
     pub fn prepare(&self) -> anyhow::Result<Params> {
-        let config = crate::config::load(self.config.as_deref(), self.method)?;
+        let config = self.load()?;
+        self.write_config(&config)?;
+        Ok(config)
+    }
+
+    /// Loads the configuration (`--config` over the `--method` preset).
+    pub fn load(&self) -> anyhow::Result<Params> {
+        crate::config::load(self.config.as_deref(), self.method)
+    }
+
+    /// Creates the output folder and writes `config` into it as `config.toml`.
+    pub fn write_config(&self, config: &Params) -> anyhow::Result<()> {
         std::fs::create_dir_all(&self.out)
-            .with_context(|| format!("cannot create {}", self.out.display()))?;
+            .with_context(|| format!("--out: cannot create {}", self.out.display()))?;
         crate::outputs::write_atomic(
             &self.out.join("config.toml"),
-            crate::config::to_toml_string(&config).as_bytes(),
-        )?;
-        Ok(config)
+            crate::config::to_toml_string(config).as_bytes(),
+        )
     }
 }
 

@@ -201,7 +201,7 @@ pub fn write_outputs(dir: &Path, run: &SimRun, title: &str) -> anyhow::Result<()
 
 /// Runs `robot-app sim`.
 pub fn run(args: SimArgs) -> anyhow::Result<()> {
-    let config = args.options.prepare()?;
+    let config = args.options.load()?;
     let mut setup = match &args.world {
         None => SimSetup::load(None)?,
         Some(p) => {
@@ -232,6 +232,7 @@ pub fn run(args: SimArgs) -> anyhow::Result<()> {
     spec.setup.check_scenario(goal).map_err(|e| {
         anyhow::anyhow!("{e}; give a start and a goal in its free space with --start and --goal")
     })?;
+    args.options.write_config(&spec.config)?;
     let run = match &args.options.record {
         None => simulate(&spec, None)?,
         Some(path) => record_run(&spec, path)?,

@@ -1,0 +1,232 @@
+//! What a careless user types gets a clear error that names the option, before any work is
+//! done and without panics; and a few of the program's manners (exit codes, colours, pipes).
+
+use std::path::Path;
+use std::process::{Command, Output, Stdio};
+
+fn robot_app(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_robot-app"))
+        .args(args)
+        .stdin(Stdio::null())
+        .output()
+        .expect("robot-app runs")
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+/// Fails with exit status 1 (not a panic's 101) and a message holding every `needle`.
+fn fails_naming(args: &[&str], needles: &[&str]) -> String {
+    let o = robot_app(args);
+    let e = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{args:?}: {e}");
+    for n in needles {
+        assert!(e.contains(n), "{args:?}: {n:?} not in {e}");
+    }
+    assert!(!e.contains("panicked"), "{e}");
+    e
+}
+
+fn shared(rel: &str) -> String {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../../shared")
+        .join(rel)
+        .to_string_lossy()
+        .into_owned()
+}
+
+#[test]
+fn far_or_absurd_goals_and_starts_are_refused_before_the_robot_moves() {
+    let out = tempfile::tempdir().unwrap();
+    let o = out.path().join("run");
+    let o = o.to_str().unwrap();
+    // The paper world spans -5..5 m.
+    fails_naming(
+        &["sim", "--goal", "1000,1000", "--out", o],
+        &["target", "outside"],
+    );
+    fails_naming(
+        &["sim", "--goal", "4000,4000", "--out", o],
+        &["target", "outside"],
+    );
+    fails_naming(
+        &["sim", "--goal", "1e19,0", "--out", o],
+        &["target", "outside"],
+    );
+    fails_naming(
+        &["sim", "--start=1e308,0,0", "--out", o],
+        &["start", "outside"],
+    );
+    fails_naming(&["sim", "--goal", "nan,0", "--out", o], &["--goal"]);
+    assert!(
+        !Path::new(o).exists(),
+        "nothing is written for a refused run"
+    );
+}
+
+#[test]
+fn a_world_whose_outside_holds_the_start_is_refused() {
+    let out = tempfile::tempdir().unwrap();
+    let o = out.path().join("run");
+    let depot = shared("worlds/nav2/depot.yaml");
+    if Path::new(&depot).exists() {
+        fails_naming(
+            &["sim", "--world", &depot, "--out", o.to_str().unwrap()],
+            &["start", "outside the world", "--start"],
+        );
+    }
+    let rooms = shared("worlds/stage/simple_rooms.png");
+    if Path::new(&rooms).exists() {
+        fails_naming(
+            &["sim", "--world", &rooms, "--out", o.to_str().unwrap()],
+            &["outside the world"],
+        );
+    }
+}
+
+#[test]
+fn a_world_file_runs_its_own_scenario() {
+    let dir = tempfile::tempdir().unwrap();
+    // A folder that does not exist yet: `world generate` makes it.
+    let world = dir.path().join("worlds/w{seed}.toml");
+    let o = robot_app(&[
+        "world",
+        "generate",
+        "--out",
+        world.to_str().unwrap(),
+        "--seed",
+        "3",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let world = dir.path().join("worlds/w3.toml");
+    let text = std::fs::read_to_string(&world).unwrap();
+    let out = dir.path().join("run");
+    let _ = robot_app(&[
+        "sim",
+        "--world",
+        world.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    // The summary's start and goal are the file's, not the paper's (-3.92, -4.26) and (4, 4).
+    let goal = summary["goal"].as_array().unwrap();
+    let (gx, gy) = (goal[0].as_f64().unwrap(), goal[1].as_f64().unwrap());
+    assert!((gx, gy) != (4.0, 4.0), "{summary}");
+    let table: toml::Table = text.parse().unwrap();
+    let target = table["target"].as_array().unwrap();
+    assert!((target[0].as_float().unwrap() - gx).abs() < 1e-9, "{text}");
+    assert!((target[1].as_float().unwrap() - gy).abs() < 1e-9, "{text}");
+}
+
+#[test]
+fn configuration_values_out_of_range_name_their_key() {
+    let dir = tempfile::tempdir().unwrap();
+    for (text, key) in [
+        (
+            "[navigator]\ngoal_tolerance_m = 100\n",
+            "navigator.goal_tolerance_m",
+        ),
+        (
+            "[localiser]\nmap_resolution_m = 0.0001\n",
+            "localiser.map_resolution_m",
+        ),
+        (
+            "[planner]\ngrid_resolution_m = 0.001\n",
+            "planner.grid_resolution_m",
+        ),
+        ("[robot]\nradius_m = -1\n", "robot.radius_m"),
+    ] {
+        let cfg = dir.path().join("c.toml");
+        std::fs::write(&cfg, text).unwrap();
+        fails_naming(
+            &["sim", "--config", cfg.to_str().unwrap()],
+            &[key, "c.toml"],
+        );
+    }
+    let intel = shared("data/intel.gfs.log");
+    if Path::new(&intel).exists() {
+        let out = dir.path().join("map");
+        fails_naming(
+            &[
+                "map",
+                "--log",
+                &intel,
+                "--resolution",
+                "0.0005",
+                "--out",
+                out.to_str().unwrap(),
+            ],
+            &["--resolution"],
+        );
+    }
+    fails_naming(&["batch", "--min-distance", "nan"], &["--min-distance"]);
+    fails_naming(&["batch", "--min-distance=-5"], &["--min-distance"]);
+}
+
+#[test]
+fn batch_checks_its_output_folder_before_the_first_run() {
+    let dir = tempfile::tempdir().unwrap();
+    // A file where the folder should be: nothing can be written under it.
+    let blocker = dir.path().join("file");
+    std::fs::write(&blocker, b"x").unwrap();
+    let out = blocker.join("batch");
+    let started = std::time::Instant::now();
+    fails_naming(
+        &["batch", "--seeds", "0..50", "--out", out.to_str().unwrap()],
+        &["--out"],
+    );
+    // 100 runs take seconds; the check takes none of them.
+    let o = robot_app(&[
+        "batch",
+        "--seeds",
+        "0..2",
+        "--scenarios",
+        "paper",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(!o.status.success());
+    assert!(started.elapsed().as_secs() < 60);
+    assert!(o.stdout.is_empty(), "no table: nothing ran");
+}
+
+#[test]
+fn errors_say_their_cause_once() {
+    let dir = tempfile::tempdir().unwrap();
+    let e = fails_naming(
+        &["sim", "--config", dir.path().to_str().unwrap()],
+        &["Is a directory"],
+    );
+    assert_eq!(e.matches("Is a directory").count(), 1, "{e}");
+}
+
+#[test]
+fn no_colour_codes_when_stderr_is_not_a_terminal() {
+    let dir = tempfile::tempdir().unwrap();
+    let o = robot_app(&["sim", "--out", dir.path().join("run").to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let e = stderr(&o);
+    assert!(!e.is_empty());
+    assert!(!e.contains('\u{1b}'), "ANSI escape in {e:?}");
+}
+
+#[test]
+fn a_closed_stdout_ends_a_command_quietly() {
+    // `robot-app scan --sim ... | head -1`: the reader goes away after one line.
+    let mut child = Command::new(env!("CARGO_BIN_EXE_robot-app"))
+        .args(["scan", "--sim", "--count", "200", "--format", "csv"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut first = [0u8; 64];
+    std::io::Read::read_exact(child.stdout.as_mut().unwrap(), &mut first).unwrap();
+    drop(child.stdout.take());
+    let o = child.wait_with_output().unwrap();
+    let e = stderr(&o);
+    assert!(o.status.success(), "exit {:?}: {e}", o.status.code());
+    assert!(!e.contains("Broken pipe"), "{e}");
+}
