@@ -40,7 +40,7 @@ mod error;
 mod map;
 
 pub use error::PlannerError;
-pub use map::ObstacleMemory;
+pub use map::{MAX_CELLS, ObstacleMemory, TARGET_CELLS};
 
 use scan_types::{
     Pose2, RobotPoint, Scan, ScanGeometry, WorldPoint, angle_diff_rad, normalize_angle_rad,

@@ -165,7 +165,8 @@ impl ObstacleMemory {
             )
         };
         let (wf, hf) = ((x1 - ox) / res + 1.0, (y1 - oy) / res + 1.0);
-        if !(wf * hf <= max_cells as f64) {
+        let cells = wf * hf;
+        if cells.is_nan() || cells > max_cells as f64 {
             if max_cells == MAX_CELLS && !self.full {
                 tracing::warn!(
                     x_m = x,
