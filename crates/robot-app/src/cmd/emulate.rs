@@ -5,7 +5,7 @@ use std::path::PathBuf;
 
 use anyhow::Context;
 use clap::Args;
-use urg_driver::{FixedSource, Model, Profile, PtyServer, emulator};
+use urg_driver::{FixedSource, Model, Profile, PtyServer, serve_pty};
 
 /// Arguments of `robot-app emulate`.
 #[derive(Debug, Args)]
@@ -28,9 +28,9 @@ pub struct EmulateArgs {
     /// Seed of the simulated laser noise.
     #[arg(long, default_value_t = 0, requires = "sim")]
     pub seed: u64,
-    /// Simulated laser noise on or off.
-    #[arg(long, default_value = "on", value_parser = ["on", "off"], requires = "sim")]
-    pub noise: String,
+    /// Simulated laser noise: on (or default) or off.
+    #[arg(long, value_enum, default_value = "on", requires = "sim")]
+    pub noise: super::Noise,
     /// Do not stop at end of standard input; serve until killed (for background use).
     #[arg(long)]
     pub no_stdin: bool,
@@ -57,11 +57,7 @@ pub fn start(args: &EmulateArgs) -> anyhow::Result<PtyServer> {
     let server = if let Some(log) = &args.source {
         let source = scan_log::LoopingLog::open(log, None)
             .with_context(|| format!("opening the log {}", log.display()))?;
-        emulator::serve_pty_with(urg_driver::SensorCore::new(
-            profile,
-            source,
-            Default::default(),
-        ))
+        serve_pty(profile, source)
     } else if args.sim {
         let pose = match &args.pose {
             Some(p) => crate::simsetup::parse_pose(p)?,
@@ -72,22 +68,23 @@ pub fn start(args: &EmulateArgs) -> anyhow::Result<PtyServer> {
             pose,
             model_name(args.model),
             args.seed,
-            args.noise == "on",
+            args.noise.is_on(),
         )?;
-        emulator::serve_pty_with(urg_driver::SensorCore::new(
-            profile,
-            source,
-            Default::default(),
-        ))
+        serve_pty(profile, source)
     } else {
         let source = FixedSource::room(profile.params.geometry());
-        emulator::serve_pty_with(urg_driver::SensorCore::new(
-            profile,
-            source,
-            Default::default(),
-        ))
+        serve_pty(profile, source)
     };
     server.context("opening a pseudo-terminal")
+}
+
+/// What the emulator described by `args` serves, for its announcement.
+fn served(args: &EmulateArgs) -> String {
+    match &args.source {
+        Some(log) => format!("ranges of the log {}", log.display()),
+        None if args.sim => "simulated ranges".into(),
+        None => "fixed scan".into(),
+    }
 }
 
 /// Runs `robot-app emulate`: prints the device path and serves until Ctrl-C or end of stdin.
@@ -102,11 +99,7 @@ pub fn run(args: EmulateArgs) -> anyhow::Result<()> {
         "emulated {} on {} ({}); stop with Ctrl-C{}",
         model_name(args.model),
         server.path(),
-        if args.sim {
-            "simulated ranges"
-        } else {
-            "fixed scan"
-        },
+        served(&args),
         if args.no_stdin {
             ""
         } else {

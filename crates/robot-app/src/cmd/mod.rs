@@ -83,3 +83,45 @@ pub fn open_sensor(
     urg_driver::SerialUrg::open_path(port, config, RECONNECT)
         .with_context(|| format!("cannot connect to the Hokuyo on {port}"))
 }
+
+/// `--noise` of `sim`, `scan` and `emulate`: the simulated sensor's noise on or off.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum Noise {
+    /// The sensor preset's noise (`default` is the same).
+    #[value(alias = "default")]
+    On,
+    /// No noise.
+    Off,
+}
+
+impl Noise {
+    /// True for [`Noise::On`].
+    pub fn is_on(self) -> bool {
+        self == Noise::On
+    }
+}
+
+impl PartialEq<&str> for Noise {
+    /// Compares with a value as written on the command line (`on`, `default`, `off`).
+    fn eq(&self, name: &&str) -> bool {
+        <Noise as clap::ValueEnum>::from_str(name, false).is_ok_and(|n| n == *self)
+    }
+}
+
+/// A whole number of at least 1 (`--count`), for clap's `value_parser`.
+pub fn positive_count(text: &str) -> Result<usize, String> {
+    match text.parse::<usize>() {
+        Ok(n) if n >= 1 => Ok(n),
+        Ok(_) => Err("must be at least 1".into()),
+        Err(e) => Err(format!("not a whole number ({e})")),
+    }
+}
+
+/// A finite number of at least 0 (rates, intervals), for clap's `value_parser`.
+pub fn non_negative(text: &str) -> Result<f64, String> {
+    match text.parse::<f64>() {
+        Ok(x) if x.is_finite() && x >= 0.0 => Ok(x),
+        Ok(_) => Err("must be a finite number >= 0".into()),
+        Err(e) => Err(format!("not a number ({e})")),
+    }
+}

@@ -33,9 +33,9 @@ pub struct SimArgs {
     /// Noise seed.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
-    /// `off` turns laser and motion noise off; `default` keeps the preset's noise.
-    #[arg(long, default_value = "default", value_parser = ["default", "off"])]
-    pub noise: String,
+    /// `off` turns laser and motion noise off; `on` (or `default`) keeps the preset's noise.
+    #[arg(long, value_enum, default_value = "on")]
+    pub noise: super::Noise,
     /// Configuration, output folder, recording.
     #[command(flatten)]
     pub options: super::LoopOptions,
