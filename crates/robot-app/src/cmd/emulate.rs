@@ -11,7 +11,7 @@ use urg_driver::{FixedSource, Model, Profile, PtyServer, serve_pty};
 #[derive(Debug, Args)]
 pub struct EmulateArgs {
     /// Sensor model: urg-04lx or utm-30lx.
-    #[arg(long, default_value = "urg-04lx", value_parser = parse_model)]
+    #[arg(long, default_value = "urg-04lx", value_parser = str::parse::<Model>)]
     pub model: Model,
     /// Start in SCIP 1.1, as a factory URG-04LX does (clients must send SCIP2.0).
     #[arg(long)]
@@ -37,10 +37,6 @@ pub struct EmulateArgs {
     /// Take ranges from a recorded log (CARMEN, BreezySLAM, goalseek MCAP), looping at its end.
     #[arg(long, conflicts_with = "sim")]
     pub source: Option<PathBuf>,
-}
-
-fn parse_model(s: &str) -> Result<Model, String> {
-    s.parse()
 }
 
 fn model_name(m: Model) -> &'static str {

@@ -53,9 +53,6 @@ pub fn run_to<W: Write>(args: &ReplayArgs, out: &mut W) -> anyhow::Result<()> {
     if args.through_loop {
         return run_loop(args, out);
     }
-    if !(args.rate.is_finite() && args.rate >= 0.0) {
-        anyhow::bail!("--rate {}: must be a number >= 0", args.rate);
-    }
     let mut source = crate::record::open_log(&args.file, args.sensor.as_deref())?;
     let geometry = *source.geometry();
     let mut recorder = match &args.record {
