@@ -5,6 +5,7 @@
 use std::io::{BufRead, BufReader, Read};
 use std::path::Path;
 use std::process::{Child, Command, Output, Stdio};
+use std::sync::{Mutex, MutexGuard};
 use std::time::{Duration, Instant};
 
 use clap::Parser;
@@ -14,10 +15,35 @@ use urg_driver::{FixedSource, Model, Profile, serve_pty};
 
 const BIN: &str = env!("CARGO_BIN_EXE_robot-app");
 
+/// Held while a child starts, and by the test serving a pseudo-terminal for its whole run: a
+/// child inherits the emulator's end of the terminal (opened without close-on-exec), which
+/// would keep the terminal open through the unplug.
+static NO_PTY_OPEN: Mutex<()> = Mutex::new(());
+
+fn pty_lock() -> MutexGuard<'static, ()> {
+    NO_PTY_OPEN.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+/// `Command::spawn` while no pseudo-terminal of this process is open.
+trait SpawnLocked {
+    fn spawn_locked(&mut self) -> Child;
+}
+
+impl SpawnLocked for Command {
+    fn spawn_locked(&mut self) -> Child {
+        let _no_pty = pty_lock();
+        self.spawn().expect("the child starts")
+    }
+}
+
 fn robot_app(args: &[&str]) -> Output {
     Command::new(BIN)
         .args(args)
-        .output()
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn_locked()
+        .wait_with_output()
         .expect("robot-app runs")
 }
 
@@ -65,12 +91,12 @@ fn scan_record_interrupted_finishes_the_recording() {
         .arg(&rec)
         .stdout(Stdio::null())
         .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
+        .spawn_locked();
     std::thread::sleep(Duration::from_secs(1));
     let killed = Command::new("kill")
         .args(["-INT", &child.id().to_string()])
-        .status()
+        .spawn_locked()
+        .wait()
         .unwrap();
     assert!(killed.success());
     let status = wait_at_most(&mut child, Duration::from_secs(20));
@@ -97,6 +123,7 @@ fn scan_record_interrupted_finishes_the_recording() {
 // pseudo-terminal (opened without close-on-exec), and the terminal would never close.
 #[test]
 fn scan_on_a_hokuyo_survives_an_unplug() {
+    let _no_child_starts = pty_lock();
     let profile = Profile::of(Model::Urg04lx);
     let geometry = profile.params.geometry();
     let server = serve_pty(profile, FixedSource::room(geometry)).unwrap();
@@ -222,8 +249,7 @@ fn emulate_names_the_log_it_serves() {
         .stdin(Stdio::piped())
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
+        .spawn_locked();
     let mut stderr = BufReader::new(child.stderr.take().unwrap());
     let mut announced = String::new();
     while !announced.contains("emulated") {
