@@ -4,94 +4,52 @@
 //! The file is written as `FILE.partial` and renamed to `FILE` when the recording finishes
 //! (or when the [`Recorder`] is dropped); see `docs/logs.md`.
 
-use std::collections::BTreeMap;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use anyhow::Context;
 use robot_base::{Command, LoggingBase, NoMotion};
 use scan_log::{
-    GeometryOverride, LEGS_METADATA, LegSummary, LogSource, McapRecorder, RecordedLaser,
-    RecordedTruth, legs_metadata,
+    GeometryOverride, LegSummary, LogError, LogSource, McapRecorder, RecordedLaser, RecordedTruth,
 };
-use scan_types::{Pose2, Scan, ScanGeometry, WorldPoint};
+use scan_types::{Pose2, ScanGeometry, WorldPoint};
 
 use crate::config::Params;
 use crate::outputs::RunLog;
 use crate::runloop::{Evaluation, LoopRun, run_loop};
 
-/// Records scans (and poses) to a goalseek MCAP file that Foxglove opens as it is.
-pub struct Recorder {
-    inner: Option<McapRecorder>,
-    geometry: ScanGeometry,
-    path: PathBuf,
-}
+/// A goalseek MCAP recording ([`McapRecorder`], whose methods it has) that also takes the legs
+/// of a run.
+pub struct Recorder(McapRecorder);
 
 impl Recorder {
-    /// Starts recording to `path`; `geometry` is used by [`Recorder::write`].
-    pub fn create(path: &Path, geometry: &ScanGeometry) -> anyhow::Result<Recorder> {
-        let inner = McapRecorder::create(path)?;
-        tracing::info!("recording to {}", path.display());
-        Ok(Recorder {
-            inner: Some(inner),
-            geometry: *geometry,
-            path: path.to_path_buf(),
-        })
+    /// Starts recording to `path`; `geometry` is the one of [`McapRecorder::write`].
+    pub fn create(path: &Path, geometry: &ScanGeometry) -> Result<Recorder, LogError> {
+        Ok(Recorder(
+            McapRecorder::create(path)?.with_geometry(geometry),
+        ))
     }
 
-    /// The final path of the recording.
-    pub fn path(&self) -> &Path {
-        &self.path
-    }
-
-    /// Scans recorded so far.
-    pub fn scans(&self) -> u64 {
-        self.inner.as_ref().map_or(0, McapRecorder::scans)
-    }
-
-    /// Records a scan of the geometry given to [`Recorder::create`], without poses.
-    pub fn write(&mut self, scan: &Scan) -> anyhow::Result<()> {
-        let g = self.geometry;
-        self.record_scan(&g, scan, None, None)
-    }
-
-    /// Records a scan with its geometry and, where known, the true and estimated poses.
-    pub fn record_scan(
-        &mut self,
-        geometry: &ScanGeometry,
-        scan: &Scan,
-        true_pose: Option<Pose2>,
-        est_pose: Option<Pose2>,
-    ) -> anyhow::Result<()> {
-        let inner = self
-            .inner
-            .as_mut()
-            .with_context(|| format!("{}: recording already finished", self.path.display()))?;
-        inner.record_scan(geometry, scan, true_pose, est_pose)?;
-        Ok(())
+    /// Writes the legs of a finished run ([`scan_log::LEGS_METADATA`]).
+    pub fn write_legs(&mut self, log: &RunLog, reason: &str) -> Result<(), LogError> {
+        self.0.write_legs(&leg_summaries(log), reason)
     }
 
     /// Closes the file and moves it to its final name; returns the number of scans.
-    pub fn finish(mut self) -> anyhow::Result<u64> {
-        self.close()
-    }
-
-    fn close(&mut self) -> anyhow::Result<u64> {
-        match self.inner.take() {
-            Some(r) => {
-                let n = r.finish()?;
-                tracing::info!("recorded {n} scans to {}", self.path.display());
-                Ok(n)
-            }
-            None => Ok(0),
-        }
+    pub fn finish(self) -> Result<u64, LogError> {
+        self.0.finish()
     }
 }
 
-impl Drop for Recorder {
-    fn drop(&mut self) {
-        if let Err(e) = self.close() {
-            tracing::error!("closing the recording {}: {e:#}", self.path.display());
-        }
+impl std::ops::Deref for Recorder {
+    type Target = McapRecorder;
+    fn deref(&self) -> &McapRecorder {
+        &self.0
+    }
+}
+
+impl std::ops::DerefMut for Recorder {
+    fn deref_mut(&mut self) -> &mut McapRecorder {
+        &mut self.0
     }
 }
 
@@ -140,28 +98,6 @@ pub fn leg_summaries(log: &RunLog) -> Vec<LegSummary> {
             point_b: l.point_b.map(xy),
         })
         .collect()
-}
-
-impl Recorder {
-    /// Writes an MCAP metadata record (name and string pairs).
-    pub fn write_metadata(
-        &mut self,
-        name: &str,
-        values: &BTreeMap<String, String>,
-    ) -> anyhow::Result<()> {
-        let inner = self
-            .inner
-            .as_mut()
-            .with_context(|| format!("{}: recording already finished", self.path.display()))?;
-        inner.write_metadata(name, values)?;
-        Ok(())
-    }
-
-    /// Writes the legs of a finished run ([`LEGS_METADATA`]).
-    pub fn write_legs(&mut self, log: &RunLog, reason: &str) -> anyhow::Result<()> {
-        let m = legs_metadata(&leg_summaries(log), reason);
-        self.write_metadata(LEGS_METADATA, &m)
-    }
 }
 
 // The recorded true poses as the loop's evaluation; a recording knows no collisions.

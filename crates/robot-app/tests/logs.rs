@@ -2,6 +2,7 @@
 
 use std::path::PathBuf;
 
+use robot_app::cmd::Noise;
 use robot_app::cmd::emulate::{self, EmulateArgs};
 use robot_app::cmd::replay::{self, ReplayArgs};
 use robot_app::cmd::scan::{self, ScanArgs, ScanFormat};
@@ -71,7 +72,7 @@ fn scan_record_then_replay_prints_the_same_csv() {
         pose: None,
         sensor: "paper".into(),
         seed: 4,
-        noise: "on".into(),
+        noise: Noise::On,
         record: Some(rec.clone()),
     };
     let mut live = Vec::new();
@@ -113,7 +114,7 @@ fn emulate_source_serves_a_recording_over_scip() {
         world: None,
         pose: None,
         seed: 0,
-        noise: "off".into(),
+        noise: Noise::Off,
         no_stdin: true,
         source: Some(path),
     })
@@ -129,7 +130,7 @@ fn emulate_source_serves_a_recording_over_scip() {
         pose: None,
         sensor: "paper".into(),
         seed: 0,
-        noise: "off".into(),
+        noise: Noise::Off,
         record: None,
     };
     scan::run_to(&args, &mut out).unwrap();

@@ -1,5 +1,6 @@
 //! `robot-app info`, `scan` and `emulate` against the emulator on a pseudo-terminal.
 
+use robot_app::cmd::Noise;
 use robot_app::cmd::emulate::{self, EmulateArgs};
 use robot_app::cmd::info::{self, InfoArgs};
 use robot_app::cmd::scan::{self, ScanArgs, ScanFormat};
@@ -17,7 +18,7 @@ fn scan_args(port: Option<String>, format: ScanFormat, count: usize) -> ScanArgs
         pose: None,
         sensor: "paper".into(),
         seed: 0,
-        noise: "off".into(),
+        noise: Noise::Off,
         record: None,
     }
 }
@@ -100,7 +101,7 @@ fn scan_sim_and_emulate_sim_agree() {
         world: None,
         pose: None,
         seed: 0,
-        noise: "off".into(),
+        noise: Noise::Off,
         no_stdin: true,
         source: None,
     })

@@ -1,4 +1,5 @@
-//! The scan CSV form shared by `robot-app scan` (writer) and `robot-app expand` (reader).
+//! The scan CSV form shared by `robot-app scan` (writer) and `robot-app expand` (reader), and
+//! the JSON form of `robot-app scan --format json`.
 //!
 //! A first comment line carries the geometry, then a header and one row per ray:
 //!
@@ -13,9 +14,9 @@
 
 use std::io::{BufRead, Write};
 
-use scan_types::{RayStatus, Scan, ScanGeometry};
+use scan_types::{Pose2, RayStatus, Scan, ScanGeometry};
 
-use crate::LogError;
+use crate::{LogError, LogRecord};
 
 /// The cause kept by [`LogError::Csv`].
 type Cause = Option<Box<dyn std::error::Error + Send + Sync>>;
@@ -45,6 +46,49 @@ pub fn write_scan_csv<W: Write>(
         writeln!(w, "{i},{:.9},{:.6},{valid}", geometry.bearing_rad(i), r)?;
     }
     Ok(())
+}
+
+/// Scan number `index` as JSON: geometry, time stamps, ranges (null for invalid rays) and
+/// statuses (`hit`, `max_range`, `error:CODE`).
+pub fn scan_json(index: usize, g: &ScanGeometry, scan: &Scan) -> serde_json::Value {
+    let ranges: Vec<Option<f64>> = scan
+        .ranges_m
+        .iter()
+        .map(|&r| r.is_finite().then_some(r))
+        .collect();
+    let status: Vec<String> = scan
+        .status
+        .iter()
+        .map(|s| match s {
+            RayStatus::Hit => "hit".to_string(),
+            RayStatus::MaxRange => "max_range".to_string(),
+            RayStatus::Error(c) => format!("error:{c}"),
+        })
+        .collect();
+    serde_json::json!({
+        "scan": index,
+        "sensor_time_ms": scan.sensor_time_ms,
+        "host_time_s": scan.host_time_s,
+        "first_bearing_rad": g.first_bearing_rad,
+        "increment_rad": g.increment_rad,
+        "ray_count": g.ray_count,
+        "min_range_m": g.min_range_m,
+        "max_range_m": g.max_range_m,
+        "ranges_m": ranges,
+        "status": status,
+        "intensities": scan.intensities,
+    })
+}
+
+/// Record number `index` of a log as JSON: [`scan_json`] of its scan (geometry `g`) with its
+/// `line` and its `pose` and `true_pose` (`[x_m, y_m, theta_rad]`, null where the log has none).
+pub fn record_json(index: usize, g: &ScanGeometry, record: &LogRecord) -> serde_json::Value {
+    let mut v = scan_json(index, g, &record.scan);
+    let pose = |p: Option<Pose2>| p.map(|p| serde_json::json!([p.x_m, p.y_m, p.theta_rad]));
+    v["pose"] = pose(record.pose).into();
+    v["true_pose"] = pose(record.true_pose).into();
+    v["line"] = record.line.into();
+    v
 }
 
 /// Reads a scan written by [`write_scan_csv`]; errors name the file and line.

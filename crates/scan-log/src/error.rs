@@ -123,6 +123,12 @@ pub enum LogError {
         #[source]
         source: Option<serde_json::Error>,
     },
+    /// [`crate::McapRecorder::write`] was called before any geometry was known.
+    #[error("{}: no scan geometry to record a bare scan with", path.display())]
+    NoGeometry {
+        /// The file.
+        path: PathBuf,
+    },
     /// The recorder was used after `finish`.
     #[error("{}: the recording is already finished", path.display())]
     Finished {

@@ -10,7 +10,8 @@
 //!   atomically (temp file + rename); [`read_mcap`] reads it back bit for bit.
 //! - [`open_log`], [`LoopingLog`], [`RecordedLaser`]: a log played back as a laser, with a
 //!   geometry override, looping at its end, or with its recorded true poses.
-//! - [`write_scan_csv`], [`read_scan_csv`]: one scan as the CSV of `robot-app scan`.
+//! - [`write_scan_csv`], [`read_scan_csv`], [`scan_json`], [`record_json`]: one scan as the CSV
+//!   or JSON of `robot-app scan` and `robot-app replay`.
 //! - [`RunSettings`], [`LegSummary`]: the metadata of a recorded simulated run, its settings
 //!   and the legs it drove, for a replay through the loop.
 //!
@@ -44,7 +45,7 @@ pub use breezy::{
     BREEZY_HEADER_FIELDS, BREEZY_RAY_COUNT, URG_DMIN_MM, breezy_geometry, classify_mm,
 };
 pub use carmen::{CARMEN_DEFAULT_MAX_RANGE_M, flaser_geometry};
-pub use csv::{read_scan_csv, write_scan_csv};
+pub use csv::{read_scan_csv, record_json, scan_json, write_scan_csv};
 pub use error::LogError;
 pub use mcap_io::{
     EST_POSE_TOPIC, McapRecorder, MetadataRecord, SCAN_TOPIC, STATUS_HIT, STATUS_MAX_RANGE,

@@ -215,6 +215,7 @@ pub struct McapRecorder {
     true_ch: u16,
     est_ch: u16,
     seq: u64,
+    geometry: Option<ScanGeometry>,
 }
 
 /// The temporary name a recording has until it is finished.
@@ -266,6 +267,7 @@ impl McapRecorder {
         let est_ch = writer
             .add_channel(pose_schema, EST_POSE_TOPIC, "json", &meta)
             .map_err(mcap_err)?;
+        tracing::info!("recording to {}", path.display());
         Ok(Self {
             writer: Some(writer),
             tmp_path,
@@ -274,7 +276,22 @@ impl McapRecorder {
             true_ch,
             est_ch,
             seq: 0,
+            geometry: None,
         })
+    }
+
+    /// Sets the geometry of the scans [`McapRecorder::write`] records.
+    pub fn with_geometry(mut self, geometry: &ScanGeometry) -> Self {
+        self.geometry = Some(*geometry);
+        self
+    }
+
+    /// Records a scan without poses, of the geometry given to [`McapRecorder::with_geometry`].
+    pub fn write(&mut self, scan: &Scan) -> Result<(), LogError> {
+        let geometry = self.geometry.ok_or_else(|| LogError::NoGeometry {
+            path: self.path.clone(),
+        })?;
+        self.record_scan(&geometry, scan, None, None)
     }
 
     /// The final path of the recording.
@@ -379,6 +396,7 @@ impl McapRecorder {
             path: self.path.clone(),
             source,
         })?;
+        tracing::info!("recorded {} scans to {}", self.seq, self.path.display());
         Ok(self.seq)
     }
 }

@@ -135,6 +135,30 @@ pub fn legs_metadata(legs: &[LegSummary], reason: &str) -> BTreeMap<String, Stri
     ])
 }
 
+impl std::fmt::Display for LegSummary {
+    /// `leg 3: estimate (x, y, theta rad), landmark (x, y), point B (x, y)`, every number
+    /// written in full (shortest form that reads back to the same bits), `none` where absent.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let point =
+            |p: Option<[f64; 2]>| p.map_or("none".to_string(), |[x, y]| format!("({x}, {y})"));
+        let [x, y, theta] = self.estimate;
+        write!(
+            f,
+            "leg {}: estimate ({x}, {y}, {theta} rad), landmark {}, point B {}",
+            self.leg,
+            point(self.landmark),
+            point(self.point_b)
+        )
+    }
+}
+
+impl crate::McapRecorder {
+    /// Writes the legs of a finished run that ended for `reason` ([`LEGS_METADATA`]).
+    pub fn write_legs(&mut self, legs: &[LegSummary], reason: &str) -> Result<(), LogError> {
+        self.write_metadata(LEGS_METADATA, &legs_metadata(legs, reason))
+    }
+}
+
 /// The end reason and the legs stored in the recording at `path`, if it stores them.
 pub fn read_recorded_legs(path: &Path) -> Result<Option<(String, Vec<LegSummary>)>, LogError> {
     let Some(m) = find_metadata(path, LEGS_METADATA)? else {

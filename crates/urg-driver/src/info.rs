@@ -276,6 +276,68 @@ impl StateInfo {
     }
 }
 
+impl std::fmt::Display for VersionInfo {
+    /// Every line of the reply as `  KEY  value`, one per line.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        self.lines
+            .iter()
+            .try_for_each(|(k, v)| writeln!(f, "  {k}  {v}"))
+    }
+}
+
+impl std::fmt::Display for SensorParams {
+    /// Every parameter as `  KEY  value` with its meaning (degrees, milliseconds), then the
+    /// scan geometry it gives; one per line.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let deg = |step: u16| self.step_bearing_rad(f64::from(step)).to_degrees();
+        writeln!(f, "  MODL  {}", self.model)?;
+        writeln!(
+            f,
+            "  DMIN  {} mm (smaller values are error codes)",
+            self.dmin_mm
+        )?;
+        writeln!(f, "  DMAX  {} mm", self.dmax_mm)?;
+        writeln!(
+            f,
+            "  ARES  {} steps per turn ({:.7} deg per step)",
+            self.ares,
+            360.0 / f64::from(self.ares)
+        )?;
+        writeln!(f, "  AMIN  step {} ({:.3} deg)", self.amin, deg(self.amin))?;
+        writeln!(f, "  AMAX  step {} ({:.3} deg)", self.amax, deg(self.amax))?;
+        writeln!(f, "  AFRT  step {} (straight ahead)", self.afrt)?;
+        writeln!(
+            f,
+            "  SCAN  {} rpm ({} ms per scan)",
+            self.scan_rpm,
+            self.scan_period().as_secs_f64() * 1000.0
+        )?;
+        let g = self.geometry();
+        writeln!(
+            f,
+            "  geometry: {} rays from {:.3} to {:.3} deg, ranges {} to {} m",
+            g.ray_count,
+            g.first_bearing_rad.to_degrees(),
+            g.last_bearing_rad().to_degrees(),
+            g.min_range_m,
+            g.max_range_m
+        )
+    }
+}
+
+impl std::fmt::Display for StateInfo {
+    /// Every line of the reply as `  KEY  value`, `TIME` with its value in milliseconds.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        for (k, v) in &self.lines {
+            match self.time_ms {
+                Some(ms) if k == "TIME" => writeln!(f, "  {k}  {v} ({ms} ms on the sensor clock)")?,
+                _ => writeln!(f, "  {k}  {v}")?,
+            }
+        }
+        Ok(())
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -304,6 +366,22 @@ mod tests {
             p.step_bearing_rad(44.5),
             epsilon = 1e-12
         );
+    }
+
+    #[test]
+    fn pp_text_gives_steps_in_degrees() {
+        // Step s of the URG-04LX is at (s - 384) * 360 / 1024 deg; 600 rpm is 100 ms a turn.
+        let text = SensorParams::urg_04lx().to_string();
+        for line in [
+            "  DMIN  20 mm (smaller values are error codes)\n",
+            "  ARES  1024 steps per turn (0.3515625 deg per step)\n",
+            "  AMIN  step 44 (-119.531 deg)\n",
+            "  AMAX  step 725 (119.883 deg)\n",
+            "  SCAN  600 rpm (100 ms per scan)\n",
+            "  geometry: 682 rays from -119.531 to 119.883 deg, ranges 0.02 to 5.6 m\n",
+        ] {
+            assert!(text.contains(line), "{line:?} not in {text}");
+        }
     }
 
     #[test]

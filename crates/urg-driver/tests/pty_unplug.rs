@@ -65,6 +65,12 @@ fn a_bare_driver_reports_the_unplug_as_a_disconnect() {
     let mut urg = Urg::open(server.path(), config()).unwrap();
     urg.next_scan().unwrap();
     server.control().unplug();
+    // The emulator's thread closes the terminal a moment later (its link goes with it).
+    let gone = (0..200).any(|_| {
+        std::thread::sleep(Duration::from_millis(5));
+        !std::path::Path::new(server.path()).exists()
+    });
+    assert!(gone);
     let e = urg.next_scan().unwrap_err();
     assert!(matches!(e, UrgError::Disconnected(_)), "{e}");
 }

@@ -5,13 +5,13 @@ use std::path::PathBuf;
 
 use anyhow::Context;
 use clap::Args;
-use urg_driver::{FixedSource, Model, Profile, PtyServer, emulator};
+use urg_driver::{FixedSource, Model, Profile, PtyServer, serve_pty};
 
 /// Arguments of `robot-app emulate`.
 #[derive(Debug, Args)]
 pub struct EmulateArgs {
     /// Sensor model: urg-04lx or utm-30lx.
-    #[arg(long, default_value = "urg-04lx", value_parser = parse_model)]
+    #[arg(long, default_value = "urg-04lx", value_parser = str::parse::<Model>)]
     pub model: Model,
     /// Start in SCIP 1.1, as a factory URG-04LX does (clients must send SCIP2.0).
     #[arg(long)]
@@ -28,19 +28,15 @@ pub struct EmulateArgs {
     /// Seed of the simulated laser noise.
     #[arg(long, default_value_t = 0, requires = "sim")]
     pub seed: u64,
-    /// Simulated laser noise on or off.
-    #[arg(long, default_value = "on", value_parser = ["on", "off"], requires = "sim")]
-    pub noise: String,
+    /// Simulated laser noise: on (or default) or off.
+    #[arg(long, value_enum, default_value = "on", requires = "sim")]
+    pub noise: super::Noise,
     /// Do not stop at end of standard input; serve until killed (for background use).
     #[arg(long)]
     pub no_stdin: bool,
     /// Take ranges from a recorded log (CARMEN, BreezySLAM, goalseek MCAP), looping at its end.
     #[arg(long, conflicts_with = "sim")]
     pub source: Option<PathBuf>,
-}
-
-fn parse_model(s: &str) -> Result<Model, String> {
-    s.parse()
 }
 
 fn model_name(m: Model) -> &'static str {
@@ -57,11 +53,7 @@ pub fn start(args: &EmulateArgs) -> anyhow::Result<PtyServer> {
     let server = if let Some(log) = &args.source {
         let source = scan_log::LoopingLog::open(log, None)
             .with_context(|| format!("opening the log {}", log.display()))?;
-        emulator::serve_pty_with(urg_driver::SensorCore::new(
-            profile,
-            source,
-            Default::default(),
-        ))
+        serve_pty(profile, source)
     } else if args.sim {
         let pose = match &args.pose {
             Some(p) => crate::simsetup::parse_pose(p)?,
@@ -72,22 +64,23 @@ pub fn start(args: &EmulateArgs) -> anyhow::Result<PtyServer> {
             pose,
             model_name(args.model),
             args.seed,
-            args.noise == "on",
+            args.noise.is_on(),
         )?;
-        emulator::serve_pty_with(urg_driver::SensorCore::new(
-            profile,
-            source,
-            Default::default(),
-        ))
+        serve_pty(profile, source)
     } else {
         let source = FixedSource::room(profile.params.geometry());
-        emulator::serve_pty_with(urg_driver::SensorCore::new(
-            profile,
-            source,
-            Default::default(),
-        ))
+        serve_pty(profile, source)
     };
     server.context("opening a pseudo-terminal")
+}
+
+/// What the emulator described by `args` serves, for its announcement.
+fn served(args: &EmulateArgs) -> String {
+    match &args.source {
+        Some(log) => format!("ranges of the log {}", log.display()),
+        None if args.sim => "simulated ranges".into(),
+        None => "fixed scan".into(),
+    }
 }
 
 /// Runs `robot-app emulate`: prints the device path and serves until Ctrl-C or end of stdin.
@@ -102,11 +95,7 @@ pub fn run(args: EmulateArgs) -> anyhow::Result<()> {
         "emulated {} on {} ({}); stop with Ctrl-C{}",
         model_name(args.model),
         server.path(),
-        if args.sim {
-            "simulated ranges"
-        } else {
-            "fixed scan"
-        },
+        served(&args),
         if args.no_stdin {
             ""
         } else {

@@ -105,3 +105,38 @@ pub fn check_map_options(resolution_m: f64, max_range_m: f64) -> anyhow::Result<
     }
     Ok(())
 }
+
+/// `--noise` of `sim`, `scan` and `emulate`: the simulated sensor's noise on or off.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum Noise {
+    /// The sensor preset's noise (`default` is the same).
+    #[value(alias = "default")]
+    On,
+    /// No noise.
+    Off,
+}
+
+impl Noise {
+    /// True for [`Noise::On`].
+    pub fn is_on(self) -> bool {
+        self == Noise::On
+    }
+}
+
+/// A whole number of at least 1 (`--count`), for clap's `value_parser`.
+pub fn positive_count(text: &str) -> Result<usize, String> {
+    match text.parse::<usize>() {
+        Ok(n) if n >= 1 => Ok(n),
+        Ok(_) => Err("must be at least 1".into()),
+        Err(e) => Err(format!("not a whole number ({e})")),
+    }
+}
+
+/// A finite number of at least 0 (rates, intervals), for clap's `value_parser`.
+pub fn non_negative(text: &str) -> Result<f64, String> {
+    match text.parse::<f64>() {
+        Ok(x) if x.is_finite() && x >= 0.0 => Ok(x),
+        Ok(_) => Err("must be a finite number >= 0".into()),
+        Err(e) => Err(format!("not a number ({e})")),
+    }
+}

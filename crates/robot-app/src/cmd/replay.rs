@@ -16,14 +16,15 @@ use crate::cmd::scan::ScanFormat;
 pub struct ReplayArgs {
     /// The log: CARMEN .log/.log.gz, BreezySLAM .dat, or a goalseek .mcap recording.
     pub file: PathBuf,
-    /// Playback speed relative to the log's time stamps (2 = twice as fast, 0 = no waiting).
-    #[arg(long, default_value_t = 1.0)]
+    /// Playback speed relative to the log's time stamps (2 = twice as fast, 0 = no waiting);
+    /// a number >= 0.
+    #[arg(long, default_value_t = 1.0, value_parser = super::non_negative)]
     pub rate: f64,
     /// Sensor preset whose geometry replaces the log's: paper, urg-04lx, utm-30lx.
     #[arg(long)]
     pub sensor: Option<String>,
-    /// Print at most this many scans (default: the whole log).
-    #[arg(long)]
+    /// Print at most this many scans, at least 1 (default: the whole log).
+    #[arg(long, value_parser = super::positive_count)]
     pub count: Option<usize>,
     /// Output format (as `robot-app scan`).
     #[arg(long, value_enum, default_value = "csv")]
@@ -52,9 +53,6 @@ pub fn run_to<W: Write>(args: &ReplayArgs, out: &mut W) -> anyhow::Result<()> {
     if args.through_loop {
         return run_loop(args, out);
     }
-    if !(args.rate.is_finite() && args.rate >= 0.0) {
-        anyhow::bail!("--rate {}: must be a number >= 0", args.rate);
-    }
     let mut source = crate::record::open_log(&args.file, args.sensor.as_deref())?;
     let geometry = *source.geometry();
     let mut recorder = match &args.record {
@@ -80,25 +78,9 @@ pub fn run_to<W: Write>(args: &ReplayArgs, out: &mut W) -> anyhow::Result<()> {
                 std::thread::sleep(Duration::from_secs_f64((due - now).min(60.0)));
             }
         }
-        match args.format {
-            ScanFormat::Csv => {
-                if k > 0 {
-                    writeln!(out)?;
-                }
-                scan_log::write_scan_csv(&mut *out, &geometry, scan)?;
-            }
-            ScanFormat::Json => {
-                let mut v = crate::cmd::scan::scan_json(k, &geometry, scan);
-                let pose = |p: Option<scan_types::Pose2>| {
-                    p.map(|p| serde_json::json!([p.x_m, p.y_m, p.theta_rad]))
-                };
-                v["pose"] = pose(rec.pose).into();
-                v["true_pose"] = pose(rec.true_pose).into();
-                v["line"] = rec.line.into();
-                serde_json::to_writer(&mut *out, &v)?;
-                writeln!(out)?;
-            }
-        }
+        super::scan::print_scan(out, args.format, k, &geometry, scan, || {
+            scan_log::record_json(k, &geometry, &rec)
+        })?;
         if let Some(r) = recorder.as_mut() {
             r.record_scan(&geometry, scan, rec.true_pose, rec.pose)?;
         }
@@ -117,7 +99,8 @@ pub fn run_to<W: Write>(args: &ReplayArgs, out: &mut W) -> anyhow::Result<()> {
 }
 
 /// `robot-app replay FILE --loop`: the recorded scans through the loop; fails if the legs
-/// differ from the recorded ones.
+/// differ from the recorded ones or if the replayed run does not reach the target (as `sim`
+/// fails then; a cut recording ends in `sensor_failure`).
 fn run_loop<W: Write>(args: &ReplayArgs, out: &mut W) -> anyhow::Result<()> {
     use crate::record::{leg_summaries, read_settings, replay_loop};
     let settings = read_settings(&args.file)?;
@@ -144,35 +127,53 @@ fn run_loop<W: Write>(args: &ReplayArgs, out: &mut W) -> anyhow::Result<()> {
             .to_png(&dir.join("map.png"))
             .with_context(|| format!("writing map.png in {}", dir.display()))?;
     }
-    let Some((reason, recorded)) = scan_log::read_recorded_legs(&args.file)? else {
+    let compared = compare_legs(&args.file, &leg_summaries(log), o.legs_driven, out);
+    out.flush()?;
+    compared?;
+    if o.reason != crate::outputs::Reason::Reached {
+        anyhow::bail!(
+            "the replayed run did not reach the target: {} ({})",
+            o.reason,
+            o.note
+        );
+    }
+    Ok(())
+}
+
+/// Compares the legs of the replay with those recorded in `file` (if any), saying so to `out`;
+/// an error names the first row that differs.
+fn compare_legs<W: Write>(
+    file: &std::path::Path,
+    replayed: &[scan_log::LegSummary],
+    legs_driven: usize,
+    out: &mut W,
+) -> anyhow::Result<()> {
+    let Some((reason, recorded)) = scan_log::read_recorded_legs(file)? else {
         writeln!(out, "the recording holds no legs to compare with")?;
-        out.flush()?;
         return Ok(());
     };
-    let replayed = leg_summaries(log);
     let first_diff = recorded
         .iter()
-        .zip(&replayed)
+        .zip(replayed)
         .position(|(a, b)| a != b)
         .or_else(|| (recorded.len() != replayed.len()).then(|| recorded.len().min(replayed.len())));
-    match first_diff {
-        None => {
-            writeln!(
-                out,
-                "same legs as recorded: {} rows (start + {} legs), every estimate, landmark and point B bit for bit; recorded end: {reason}",
-                recorded.len(),
-                o.legs_driven
-            )?;
-            out.flush()?;
-            Ok(())
-        }
-        Some(i) => {
-            out.flush()?;
-            anyhow::bail!(
-                "the replayed legs differ from the recorded ones at row {i}: recorded {:?}, replayed {:?}",
-                recorded.get(i),
-                replayed.get(i)
-            )
-        }
-    }
+    let Some(i) = first_diff else {
+        writeln!(
+            out,
+            "same legs as recorded: {} rows (start + {legs_driven} legs), every estimate, landmark and point B bit for bit; recorded end: {reason}",
+            recorded.len(),
+        )?;
+        return Ok(());
+    };
+    let row = |legs: &[scan_log::LegSummary], what: &str| {
+        legs.get(i).map_or_else(
+            || format!("{what} nothing ({} rows in all)", legs.len()),
+            |l| format!("{what} {l}"),
+        )
+    };
+    anyhow::bail!(
+        "the replayed legs differ from the recorded ones at row {i}: {}; {}",
+        row(&recorded, "recorded"),
+        row(replayed, "replayed")
+    )
 }

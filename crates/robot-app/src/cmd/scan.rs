@@ -1,12 +1,12 @@
 //! `robot-app scan`: prints scans from a Hokuyo (or the simulator) as CSV or JSON.
 
 use std::io::Write;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use anyhow::Context;
 use clap::{Args, ValueEnum};
-use scan_types::{LaserSource, RayStatus, Scan, ScanGeometry};
-use urg_driver::{AcquisitionMode, Urg, UrgConfig};
+use scan_types::{LaserSource, Scan, ScanGeometry};
+use urg_driver::{AcquisitionMode, UrgConfig};
 
 use crate::record::Recorder;
 
@@ -25,8 +25,8 @@ pub struct ScanArgs {
     /// Serial device of the sensor (/dev/ttyACM0, /dev/hokuyo, or the path `robot-app emulate` prints).
     #[arg(long, required_unless_present = "sim", conflicts_with = "sim")]
     pub port: Option<String>,
-    /// Number of scans to print.
-    #[arg(long, default_value_t = 1)]
+    /// Number of scans to print (at least 1).
+    #[arg(long, default_value_t = 1, value_parser = super::positive_count)]
     pub count: usize,
     /// Output format.
     #[arg(long, value_enum, default_value = "csv")]
@@ -49,16 +49,13 @@ pub struct ScanArgs {
     /// Seed of the simulated laser noise.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
-    /// Simulated laser noise on or off.
-    #[arg(long, default_value = "on", value_parser = ["on", "off"])]
-    pub noise: String,
+    /// Simulated laser noise: on (or default) or off.
+    #[arg(long, value_enum, default_value = "on")]
+    pub noise: super::Noise,
     /// Also record every scan to this file (MCAP).
     #[arg(long)]
     pub record: Option<PathBuf>,
 }
-
-/// Called with every scan after it is printed (the `--record` hook).
-pub type ScanSink<'a> = Box<dyn FnMut(&ScanGeometry, &Scan) -> anyhow::Result<()> + 'a>;
 
 /// Runs `robot-app scan`, printing to stdout.
 pub fn run(args: ScanArgs) -> anyhow::Result<()> {
@@ -66,12 +63,10 @@ pub fn run(args: ScanArgs) -> anyhow::Result<()> {
     super::reader_gone_is_ok(run_to(&args, &mut stdout.lock()))
 }
 
-/// Runs `robot-app scan`, writing to `out`.
+/// Runs `robot-app scan`, writing to `out`. A Hokuyo that is unplugged is waited for
+/// ([`super::RECONNECT`]); a stop asked for by a signal ends the scans, finishes the
+/// recording and returns [`crate::interrupt::Interrupted`].
 pub fn run_to<W: Write>(args: &ScanArgs, out: &mut W) -> anyhow::Result<()> {
-    let mut sink = match &args.record {
-        Some(path) => Some(record_sink(path)?),
-        None => None,
-    };
     if args.sim {
         let pose = match &args.pose {
             Some(p) => crate::simsetup::parse_pose(p)?,
@@ -83,9 +78,9 @@ pub fn run_to<W: Write>(args: &ScanArgs, out: &mut W) -> anyhow::Result<()> {
             pose,
             &args.sensor,
             args.seed,
-            args.noise == "on",
+            args.noise.is_on(),
         )?;
-        return print_scans(&mut source, args, out, sink.as_mut());
+        return print_scans(&mut source, args, out);
     }
     let port = args
         .port
@@ -99,95 +94,87 @@ pub fn run_to<W: Write>(args: &ScanArgs, out: &mut W) -> anyhow::Result<()> {
         },
         ..UrgConfig::default()
     };
-    let mut urg =
-        Urg::open(port, config).with_context(|| format!("connecting to the sensor at {port}"))?;
-    let r = print_scans(&mut urg, args, out, sink.as_mut());
-    let stop = urg.stop();
-    let stats = urg.stats();
-    if stats.checksum_errors + stats.malformed_replies > 0 {
-        tracing::warn!(
-            "{} scans dropped for checksum errors, {} malformed replies",
-            stats.checksum_errors,
-            stats.malformed_replies
-        );
-    }
-    r?;
-    stop.context("stopping the stream (QT)")?;
+    let mut urg = super::open_sensor(port, config)?;
+    let printed = print_scans(&mut urg, args, out);
+    let stopped = match urg.urg_mut() {
+        Some(u) => {
+            let stats = u.stats();
+            if stats.checksum_errors + stats.malformed_replies > 0 {
+                tracing::warn!(
+                    "{} scans dropped for checksum errors, {} malformed replies",
+                    stats.checksum_errors,
+                    stats.malformed_replies
+                );
+            }
+            u.stop()
+        }
+        None => Ok(()),
+    };
+    printed?;
+    stopped.context("stopping the stream (QT)")?;
     Ok(())
 }
 
-/// The recorder behind `--record FILE`: records every scan printed.
-fn record_sink(path: &Path) -> anyhow::Result<ScanSink<'static>> {
-    let mut rec: Option<Recorder> = None;
-    let path = path.to_path_buf();
-    Ok(Box::new(move |g: &ScanGeometry, s: &Scan| {
-        let r = match &mut rec {
-            Some(r) => r,
-            None => rec.insert(Recorder::create(&path, g)?),
-        };
-        r.record_scan(g, s, None, None)
-    }))
-}
-
+/// Prints `args.count` scans of `source` (fewer when a stop is asked for), recording them to
+/// `args.record`; the recording is finished whatever happens.
 fn print_scans<S: LaserSource, W: Write>(
     source: &mut S,
     args: &ScanArgs,
     out: &mut W,
-    mut sink: Option<&mut ScanSink<'_>>,
 ) -> anyhow::Result<()> {
     let geometry = *source.geometry();
-    for k in 0..args.count {
-        let scan = source
-            .next_scan()
-            .map_err(|e| anyhow::anyhow!(e))
-            .with_context(|| format!("reading scan {} of {}", k + 1, args.count))?;
-        match args.format {
-            ScanFormat::Csv => {
-                if k > 0 {
-                    writeln!(out)?;
-                }
-                scan_log::write_scan_csv(&mut *out, &geometry, &scan)?;
+    let mut recorder: Option<Recorder> = None;
+    let mut printed = || -> anyhow::Result<()> {
+        for k in 0..args.count {
+            if crate::interrupt::requested() {
+                return Err(anyhow::Error::new(crate::interrupt::Interrupted));
             }
-            ScanFormat::Json => {
-                serde_json::to_writer(&mut *out, &scan_json(k, &geometry, &scan))?;
-                writeln!(out)?;
+            let scan = source
+                .next_scan()
+                .map_err(|e| anyhow::anyhow!(e))
+                .with_context(|| format!("reading scan {} of {}", k + 1, args.count))?;
+            print_scan(out, args.format, k, &geometry, &scan, || {
+                scan_log::scan_json(k, &geometry, &scan)
+            })?;
+            if let Some(path) = &args.record {
+                let r = match &mut recorder {
+                    Some(r) => r,
+                    None => recorder.insert(Recorder::create(path, &geometry)?),
+                };
+                r.write(&scan)?;
             }
         }
-        if let Some(s) = sink.as_mut() {
-            s(&geometry, &scan)?;
-        }
-    }
+        Ok(())
+    };
+    let printed = printed();
+    let finished = recorder.map(Recorder::finish).transpose();
     out.flush()?;
+    printed?;
+    finished?;
     Ok(())
 }
 
-/// One scan as JSON: geometry, time stamps, ranges (null for invalid rays) and statuses.
-pub fn scan_json(index: usize, g: &ScanGeometry, scan: &Scan) -> serde_json::Value {
-    let ranges: Vec<Option<f64>> = scan
-        .ranges_m
-        .iter()
-        .map(|&r| r.is_finite().then_some(r))
-        .collect();
-    let status: Vec<String> = scan
-        .status
-        .iter()
-        .map(|s| match s {
-            RayStatus::Hit => "hit".to_string(),
-            RayStatus::MaxRange => "max_range".to_string(),
-            RayStatus::Error(c) => format!("error:{c}"),
-        })
-        .collect();
-    serde_json::json!({
-        "scan": index,
-        "sensor_time_ms": scan.sensor_time_ms,
-        "host_time_s": scan.host_time_s,
-        "first_bearing_rad": g.first_bearing_rad,
-        "increment_rad": g.increment_rad,
-        "ray_count": g.ray_count,
-        "min_range_m": g.min_range_m,
-        "max_range_m": g.max_range_m,
-        "ranges_m": ranges,
-        "status": status,
-        "intensities": scan.intensities,
-    })
+/// Prints scan number `k` in `format`: a CSV block (after a blank line but for the first) or
+/// one line of JSON, `json` giving the object.
+pub fn print_scan<W: Write>(
+    out: &mut W,
+    format: ScanFormat,
+    k: usize,
+    geometry: &ScanGeometry,
+    scan: &Scan,
+    json: impl FnOnce() -> serde_json::Value,
+) -> anyhow::Result<()> {
+    match format {
+        ScanFormat::Csv => {
+            if k > 0 {
+                writeln!(out)?;
+            }
+            scan_log::write_scan_csv(&mut *out, geometry, scan)?;
+        }
+        ScanFormat::Json => {
+            serde_json::to_writer(&mut *out, &json())?;
+            writeln!(out)?;
+        }
+    }
+    Ok(())
 }

@@ -34,9 +34,9 @@ pub struct SimArgs {
     /// Noise seed.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
-    /// `off` turns laser and motion noise off; `default` keeps the preset's noise.
-    #[arg(long, default_value = "default", value_parser = ["default", "off"])]
-    pub noise: String,
+    /// `off` turns laser and motion noise off; `on` (or `default`) keeps the preset's noise.
+    #[arg(long, value_enum, default_value = "on")]
+    pub noise: super::Noise,
     /// Configuration, output folder, recording.
     #[command(flatten)]
     pub options: super::LoopOptions,
@@ -227,7 +227,7 @@ pub fn run(args: SimArgs) -> anyhow::Result<()> {
         None => file_goal,
     };
     setup.seed = args.seed;
-    setup.noise = args.noise != "off";
+    setup.noise = args.noise.is_on();
     let spec = SimSpec::new(setup, goal, config);
     spec.setup.check_scenario(goal).map_err(|e| {
         anyhow::anyhow!("{e}; give a start and a goal in its free space with --start and --goal")
