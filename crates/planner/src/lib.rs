@@ -246,12 +246,7 @@ impl Planner {
         target: WorldPoint,
     ) -> Plan {
         let n = geometry.ray_count.min(clearances_m.len()).min(scan.len());
-        let p = &self.params;
-        let leg = |i: usize| {
-            let c = clearances_m[i];
-            (c.is_finite() && c >= p.min_travel_m && c > 0.0).then(|| c.min(p.max_travel_m))
-        };
-        if !(0..n).any(|i| leg(i).is_some()) {
+        if !(0..n).any(|i| self.leg(clearances_m, i).is_some()) {
             self.no_safe_tries += 1;
             tracing::debug!(tries = self.no_safe_tries, "no safe ray");
             if self.no_safe_tries >= self.params.max_no_safe_tries {
@@ -271,45 +266,11 @@ impl Planner {
             return plan;
         }
 
-        let mut map_path = self.params.rule == PlanRule::MapPath;
-        if map_path {
-            self.memory.ensure_contains(pose.position());
-            self.memory.update_field(target);
-            let reachable = (0..n).filter_map(|i| leg(i).map(|t| (i, t))).any(|(i, t)| {
-                let end = pose.transform_point(geometry.robot_point(i, t));
-                self.memory.path_length_m(end).is_some()
-            });
-            if reachable {
-                self.no_path_tries = 0;
-            } else {
-                // Every safe end is cut off from the target on the map: walled in, or a
-                // spurious closure; rank by straight-line distance meanwhile.
-                self.no_path_tries += 1;
-                tracing::debug!(
-                    tries = self.no_path_tries,
-                    "no path to the target on the map"
-                );
-                if self.no_path_tries >= self.params.max_no_safe_tries {
-                    return Plan::Unreachable {
-                        tries: self.no_path_tries,
-                    };
-                }
-                map_path = false;
-            }
-        }
-        self.candidates.clear();
-        let dirs = geometry.directions();
-        for i in 0..n {
-            let Some(travel) = leg(i) else { continue };
-            let end =
-                pose.transform_point(RobotPoint::new(travel * dirs[i][0], travel * dirs[i][1]));
-            let score = if map_path {
-                self.memory.path_length_m(end).unwrap_or(f64::INFINITY)
-            } else {
-                end.distance_m(&target)
-            };
-            self.candidates.push((score, i, travel));
-        }
+        let map_path = match self.map_path_usable(pose, geometry, clearances_m, n, target) {
+            Ok(usable) => usable,
+            Err(unreachable) => return unreachable,
+        };
+        self.rank_candidates(pose, geometry, clearances_m, (n, target), map_path);
         // Best score first; ties go to the ray nearer the target's bearing, then the longer leg.
         let order = |a: &(f64, usize, f64), b: &(f64, usize, f64)| {
             a.0.total_cmp(&b.0).then_with(|| {
@@ -340,6 +301,80 @@ impl Planner {
             };
         }
         Plan::NoSafeRay
+    }
+
+    /// The safe travel along ray `i`, if it has one.
+    fn leg(&self, clearances_m: &[f64], i: usize) -> Option<f64> {
+        let p = &self.params;
+        let c = clearances_m[i];
+        (c.is_finite() && c >= p.min_travel_m && c > 0.0).then(|| c.min(p.max_travel_m))
+    }
+
+    /// Whether to rank by path length on the map ([`PlanRule::MapPath`] with a path from some
+    /// safe end); `Err` when the map has cut the target off for too many plans in a row.
+    fn map_path_usable(
+        &mut self,
+        pose: &Pose2,
+        geometry: &ScanGeometry,
+        clearances_m: &[f64],
+        n: usize,
+        target: WorldPoint,
+    ) -> Result<bool, Plan> {
+        if self.params.rule != PlanRule::MapPath {
+            return Ok(false);
+        }
+        self.memory.ensure_contains(pose.position());
+        self.memory.update_field(target);
+        let reachable = (0..n)
+            .filter_map(|i| self.leg(clearances_m, i).map(|t| (i, t)))
+            .any(|(i, t)| {
+                let end = pose.transform_point(geometry.robot_point(i, t));
+                self.memory.path_length_m(end).is_some()
+            });
+        if reachable {
+            self.no_path_tries = 0;
+            return Ok(true);
+        }
+        // Every safe end is cut off from the target on the map: walled in, or a spurious
+        // closure; rank by straight-line distance meanwhile.
+        self.no_path_tries += 1;
+        tracing::debug!(
+            tries = self.no_path_tries,
+            "no path to the target on the map"
+        );
+        if self.no_path_tries >= self.params.max_no_safe_tries {
+            return Err(Plan::Unreachable {
+                tries: self.no_path_tries,
+            });
+        }
+        Ok(false)
+    }
+
+    /// Fills the candidates with (score, ray, travel) of every safe ray: the path length from
+    /// its end on the map, or the straight-line distance to the target.
+    fn rank_candidates(
+        &mut self,
+        pose: &Pose2,
+        geometry: &ScanGeometry,
+        clearances_m: &[f64],
+        (n, target): (usize, WorldPoint),
+        map_path: bool,
+    ) {
+        self.candidates.clear();
+        let dirs = geometry.directions();
+        for i in 0..n {
+            let Some(travel) = self.leg(clearances_m, i) else {
+                continue;
+            };
+            let end =
+                pose.transform_point(RobotPoint::new(travel * dirs[i][0], travel * dirs[i][1]));
+            let score = if map_path {
+                self.memory.path_length_m(end).unwrap_or(f64::INFINITY)
+            } else {
+                end.distance_m(&target)
+            };
+            self.candidates.push((score, i, travel));
+        }
     }
 
     /// `Plan::Go` along candidate `(score, ray, travel)` when its leg, cut by the remembered
