@@ -119,6 +119,28 @@ fn a_world_file_runs_its_own_scenario() {
     let target = table["target"].as_array().unwrap();
     assert!((target[0].as_float().unwrap() - gx).abs() < 1e-9, "{text}");
     assert!((target[1].as_float().unwrap() - gy).abs() < 1e-9, "{text}");
+
+    // A batch in that world runs the same scenario.
+    let batch = dir.path().join("batch");
+    let o = robot_app(&[
+        "batch",
+        "--worlds",
+        world.to_str().unwrap(),
+        "--seeds",
+        "0..1",
+        "--scenarios",
+        "paper",
+        "--out",
+        batch.to_str().unwrap(),
+    ]);
+    assert!(o.status.code().is_some_and(|c| c <= 1), "{}", stderr(&o));
+    let file: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(batch.join("batch.json")).unwrap()).unwrap();
+    let rows = file["rows"].as_array().unwrap();
+    assert_eq!(rows.len(), 1, "{file}");
+    assert_eq!(rows[0]["group"], "w3-scenario");
+    assert_eq!(rows[0]["goal"], summary["goal"]);
+    assert_eq!(rows[0]["start"], summary["start"]);
 }
 
 #[test]

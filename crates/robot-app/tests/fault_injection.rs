@@ -82,7 +82,17 @@ impl Harness {
 
     /// Plays the base until robot-app closes its end; `fault` runs before each answer with
     /// the number of motion commands so far.
-    fn drive(&mut self, mut fault: impl FnMut(usize, &Harness)) {
+    fn drive(&mut self, fault: impl FnMut(usize, &Harness)) {
+        self.drive_answering(fault, |_| None);
+    }
+
+    /// [`Harness::drive`], with `answer` replacing the base's answer to command `n` when it
+    /// returns one.
+    fn drive_answering(
+        &mut self,
+        mut fault: impl FnMut(usize, &Harness),
+        answer_of: impl Fn(usize) -> Option<&'static str>,
+    ) {
         let mut line = String::new();
         loop {
             line.clear();
@@ -101,9 +111,11 @@ impl Harness {
                 _ => panic!("not a base command: {cmd:?}"),
             }
             .expect("the simulated base moves");
+            let mut answer = answer;
             if cmd != "stop" {
                 self.commands += 1;
                 fault(self.commands, self);
+                answer = answer_of(self.commands).unwrap_or(answer);
             }
             // robot-app may have exited already after `stop`.
             let _ = writeln!(self.to_app, "{answer}");
@@ -322,4 +334,19 @@ fn sigint_stops_the_base_writes_everything_and_exits_130() {
     }
     assert!(scans > 0);
     assert_no_partial_files(rec.path());
+}
+
+#[test]
+fn a_base_error_ends_as_base_failure_not_sensor_failure() {
+    let mut h = Harness::start(BaseGains::default(), &[]);
+    h.drive_answering(|_, _| {}, |n| (n == 6).then_some("error motor stalled"));
+    let end = h.finish();
+    assert!(!end.status.success());
+    assert_eq!(end.reason(), "base_failure");
+    let note = end.summary.as_ref().unwrap()["note"]
+        .as_str()
+        .unwrap()
+        .to_string();
+    assert!(note.contains("motor stalled"), "{note}");
+    end.assert_clean_end();
 }
