@@ -314,11 +314,11 @@ fn sigint_stops_the_base_writes_everything_and_exits_130() {
         BaseGains::default(),
         &["--record", rec_path.to_str().unwrap()],
     );
-    let pid = h.child.id().to_string();
+    let pid = nix::unistd::Pid::from_raw(i32::try_from(h.child.id()).unwrap());
     h.drive(|n, _| {
         if n == 8 {
-            let killed = Command::new("kill").args(["-INT", &pid]).status().unwrap();
-            assert!(killed.success());
+            // What Ctrl-C in the terminal sends.
+            nix::sys::signal::kill(pid, nix::sys::signal::Signal::SIGINT).unwrap();
         }
     });
     let end = h.finish();

@@ -93,12 +93,7 @@ fn scan_record_interrupted_finishes_the_recording() {
         .stderr(Stdio::piped())
         .spawn_locked();
     std::thread::sleep(Duration::from_secs(1));
-    let killed = Command::new("kill")
-        .args(["-INT", &child.id().to_string()])
-        .spawn_locked()
-        .wait()
-        .unwrap();
-    assert!(killed.success());
+    sigint(&child);
     let status = wait_at_most(&mut child, Duration::from_secs(20));
     let mut stderr = String::new();
     child
@@ -315,4 +310,10 @@ fn numeric_options_out_of_range_are_refused_by_name() {
             "{args:?}: {err}"
         );
     }
+}
+
+/// Sends SIGINT to `child`, as Ctrl-C in its terminal does.
+fn sigint(child: &Child) {
+    let pid = nix::unistd::Pid::from_raw(i32::try_from(child.id()).expect("a pid"));
+    nix::sys::signal::kill(pid, nix::sys::signal::Signal::SIGINT).expect("the signal is sent");
 }
