@@ -404,10 +404,12 @@ impl OccupancyGrid {
         write_atomic(&pgm, &bytes)?;
         let o = self.origin();
         let text = format!(
-            "image: {stem}.pgm\nmode: trinary\nresolution: {}\norigin: [{}, {}, 0.0]\nnegate: 0\noccupied_thresh: 0.65\nfree_thresh: 0.196\n",
-            self.params.resolution_m,
-            o.x_m(),
-            o.y_m()
+            "image: {stem}.pgm\nmode: trinary\nresolution: {}\norigin: [{}, {}, 0.0]\nnegate: 0\noccupied_thresh: {}\nfree_thresh: {}\n",
+            scan_types::format_decimal(self.params.resolution_m),
+            scan_types::format_decimal(o.x_m()),
+            scan_types::format_decimal(o.y_m()),
+            scan_types::MAP_OCCUPIED_THRESH,
+            scan_types::MAP_FREE_THRESH,
         );
         write_atomic(&yaml, text.as_bytes())?;
         Ok(MapServerFiles { pgm, yaml })

@@ -89,6 +89,12 @@ fn map_server_export_reads_back() {
     // Parse the origin and map world points to pixels as map_server does: column from x,
     // row counted from the top.
     let line = yaml.lines().find(|l| l.starts_with("origin:")).unwrap();
+    // No floating-point noise (a cell multiple such as -117 * 0.05 is written -5.85).
+    for n in line["origin: [".len()..line.len() - 1].split(',') {
+        let decimals = n.trim().split_once('.').map_or(0, |(_, d)| d.len());
+        assert!(decimals <= 9, "{line}");
+    }
+    assert!(yaml.contains("free_thresh: 0.196\n") && yaml.contains("occupied_thresh: 0.65\n"));
     let nums: Vec<f64> = line["origin: [".len()..line.len() - 1]
         .split(',')
         .map(|s| s.trim().parse().unwrap())

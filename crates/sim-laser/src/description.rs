@@ -137,8 +137,12 @@ impl WorldDescription {
             .map(|s| s.to_string_lossy().into_owned())
             .unwrap_or_default();
         let yaml = format!(
-            "image: {image_name}\nmode: trinary\nresolution: {resolution_m}\norigin: [{}, {}, 0.0]\nnegate: 0\noccupied_thresh: 0.65\nfree_thresh: 0.25\n",
-            lo[0], lo[1]
+            "image: {image_name}\nmode: trinary\nresolution: {}\norigin: [{}, {}, 0.0]\nnegate: 0\noccupied_thresh: {}\nfree_thresh: {}\n",
+            scan_types::format_decimal(resolution_m),
+            scan_types::format_decimal(lo[0]),
+            scan_types::format_decimal(lo[1]),
+            scan_types::MAP_OCCUPIED_THRESH,
+            scan_types::MAP_FREE_THRESH,
         );
         write_atomic(yaml_path, yaml.as_bytes())
     }

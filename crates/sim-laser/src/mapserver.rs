@@ -35,14 +35,6 @@ pub struct MapServerYaml {
     pub mode: MapMode,
 }
 
-fn parse_num_list(v: &str) -> Option<Vec<f64>> {
-    let inner = v.trim().strip_prefix('[')?.strip_suffix(']')?;
-    inner
-        .split(',')
-        .map(|s| s.trim().parse::<f64>().ok())
-        .collect()
-}
-
 fn yaml_err(path: &Path, line: Option<usize>, field: &str, message: String) -> SimError {
     SimError::Parse {
         path: path.to_path_buf(),
@@ -52,127 +44,89 @@ fn yaml_err(path: &Path, line: Option<usize>, field: &str, message: String) -> S
     }
 }
 
-/// The keys of a map_server YAML read so far (defaults for the optional ones).
-struct YamlKeys {
+/// A map_server YAML file as written (any YAML style: flow or block lists, quoted or not);
+/// unknown keys are ignored, as map_server does.
+#[derive(Debug, serde::Deserialize)]
+struct RawYaml {
     image: Option<String>,
     resolution: Option<f64>,
-    origin: Option<[f64; 3]>,
-    negate: bool,
-    occ: f64,
-    free: f64,
-    mode: MapMode,
+    origin: Option<Vec<f64>>,
+    negate: Option<serde_norway::Value>,
+    occupied_thresh: Option<f64>,
+    free_thresh: Option<f64>,
+    mode: Option<String>,
 }
 
-/// Parses map_server YAML text (flat `key: value` lines); errors name the line and key.
+/// Parses map_server YAML text; errors name the line (where the YAML parser knows it) and key.
 pub fn parse_map_yaml(text: &str, path: &Path) -> Result<MapServerYaml, SimError> {
-    let err =
-        |line: Option<usize>, field: &str, message: String| yaml_err(path, line, field, message);
-    let mut keys = YamlKeys {
-        image: None,
-        resolution: None,
-        origin: None,
-        negate: false,
-        occ: 0.65,
-        free: 0.196,
-        mode: MapMode::Trinary,
+    // The line of a key, for errors found after parsing.
+    let line_of = |key: &str| {
+        text.lines()
+            .position(|l| {
+                l.trim_start()
+                    .strip_prefix(key)
+                    .is_some_and(|r| r.trim_start().starts_with(':'))
+            })
+            .map(|n| n + 1)
     };
-    for (n, raw) in text.lines().enumerate() {
-        let line = Some(n + 1);
-        let content = raw.split('#').next().unwrap_or("").trim();
-        if content.is_empty() {
-            continue;
+    let err = |field: &str, message: String| yaml_err(path, line_of(field), field, message);
+    let raw: RawYaml = serde_norway::from_str(text).map_err(|e| {
+        let line = e.location().map(|l| l.line());
+        // "resolution: invalid type ..." names its key first.
+        let text = e.to_string();
+        match text.split_once(": ") {
+            Some((key, rest)) if !key.contains(' ') => yaml_err(path, line, key, rest.to_string()),
+            _ => yaml_err(path, line, "yaml", text),
         }
-        let Some((key, value)) = content.split_once(':') else {
-            return Err(err(
-                line,
-                "yaml",
-                format!("expected 'key: value', found {content:?}"),
-            ));
-        };
-        let key = key.trim();
-        let value = value.trim().trim_matches('"').trim_matches('\'');
-        keys.set(key, value, line, path)?;
+    })?;
+    let finite = |field: &str, v: Option<f64>| match v {
+        Some(x) if !x.is_finite() => Err(err(field, format!("{x} is not a finite number"))),
+        other => Ok(other),
+    };
+    let resolution_m =
+        finite("resolution", raw.resolution)?.ok_or_else(|| err("resolution", "missing".into()))?;
+    if resolution_m <= 0.0 {
+        return Err(err("resolution", format!("{resolution_m} must be > 0")));
     }
-    let (occ, free) = (keys.occ, keys.free);
+    let origin = match raw.origin {
+        Some(v) if v.len() == 3 && v.iter().all(|x| x.is_finite()) => [v[0], v[1], v[2]],
+        Some(v) => return Err(err("origin", format!("{v:?} is not [x, y, yaw]"))),
+        None => return Err(err("origin", "missing".into())),
+    };
+    if origin[2] != 0.0 {
+        tracing::warn!(file = %path.display(), yaw = origin[2], "map origin yaw ignored");
+    }
+    let negate = match &raw.negate {
+        None => false,
+        Some(serde_norway::Value::Bool(b)) => *b,
+        Some(serde_norway::Value::Number(n)) if n.as_u64() == Some(0) => false,
+        Some(serde_norway::Value::Number(n)) if n.as_u64() == Some(1) => true,
+        Some(v) => return Err(err("negate", format!("{v:?} is not 0 or 1"))),
+    };
+    let mode = match raw.mode.as_deref() {
+        None | Some("trinary") => MapMode::Trinary,
+        Some("scale") => MapMode::Scale,
+        Some("raw") => MapMode::Raw,
+        Some(m) => return Err(err("mode", format!("{m:?} is not trinary, scale or raw"))),
+    };
+    let occ =
+        finite("occupied_thresh", raw.occupied_thresh)?.unwrap_or(scan_types::MAP_OCCUPIED_THRESH);
+    let free = finite("free_thresh", raw.free_thresh)?.unwrap_or(scan_types::MAP_FREE_THRESH);
     if !(0.0..=1.0).contains(&occ) || !(0.0..=1.0).contains(&free) || free > occ {
         return Err(err(
-            None,
             "occupied_thresh",
             format!("need 0 <= free_thresh ({free}) <= occupied_thresh ({occ}) <= 1"),
         ));
     }
     Ok(MapServerYaml {
-        image: keys
-            .image
-            .ok_or_else(|| err(None, "image", "missing".into()))?,
-        resolution_m: keys
-            .resolution
-            .ok_or_else(|| err(None, "resolution", "missing".into()))?,
-        origin: keys
-            .origin
-            .ok_or_else(|| err(None, "origin", "missing".into()))?,
-        negate: keys.negate,
+        image: raw.image.ok_or_else(|| err("image", "missing".into()))?,
+        resolution_m,
+        origin,
+        negate,
         occupied_thresh: occ,
         free_thresh: free,
-        mode: keys.mode,
+        mode,
     })
-}
-
-impl YamlKeys {
-    /// Reads `key: value` of line `line`; unknown keys are ignored (logged).
-    fn set(
-        &mut self,
-        key: &str,
-        value: &str,
-        line: Option<usize>,
-        path: &Path,
-    ) -> Result<(), SimError> {
-        let err = |message: String| yaml_err(path, line, key, message);
-        let num = |v: &str| {
-            v.parse::<f64>()
-                .ok()
-                .filter(|x| x.is_finite())
-                .ok_or_else(|| err(format!("{v:?} is not a number")))
-        };
-        match key {
-            "image" => self.image = Some(value.to_string()),
-            "resolution" => {
-                let r = num(value)?;
-                if r <= 0.0 {
-                    return Err(err(format!("{r} must be > 0")));
-                }
-                self.resolution = Some(r);
-            }
-            "origin" => {
-                let v = parse_num_list(value)
-                    .filter(|v| v.len() == 3 && v.iter().all(|x| x.is_finite()))
-                    .ok_or_else(|| err(format!("{value:?} is not [x, y, yaw]")))?;
-                if v[2] != 0.0 {
-                    tracing::warn!(file = %path.display(), yaw = v[2], "map origin yaw ignored");
-                }
-                self.origin = Some([v[0], v[1], v[2]]);
-            }
-            "negate" => {
-                self.negate = match value {
-                    "0" | "false" | "False" => false,
-                    "1" | "true" | "True" => true,
-                    _ => return Err(err(format!("{value:?} is not 0 or 1"))),
-                }
-            }
-            "occupied_thresh" => self.occ = num(value)?,
-            "free_thresh" => self.free = num(value)?,
-            "mode" => {
-                self.mode = match value {
-                    "trinary" => MapMode::Trinary,
-                    "scale" => MapMode::Scale,
-                    "raw" => MapMode::Raw,
-                    _ => return Err(err(format!("{value:?} is not trinary, scale or raw"))),
-                }
-            }
-            _ => tracing::debug!(file = %path.display(), key, "unknown map_server key ignored"),
-        }
-        Ok(())
-    }
 }
 
 impl MapServerYaml {

@@ -173,6 +173,15 @@ fn map_server_by_hand() {
     .unwrap();
     let w = World::load(&yaml).unwrap();
     assert!((w.raycast(p(0.0, 2.75), 0.0, 10.0).unwrap() - 1.0).abs() < 1e-12);
+    // Block-style lists, comments and quotes are YAML too (what ROS 2 map_saver and hand
+    // edits produce).
+    std::fs::write(
+        &yaml,
+        "# a map\nimage: 'm.pgm'\nresolution: 0.5  # metres\norigin:\n  - 1.0\n  - 2.0\n  - 0.0\nnegate: false\n",
+    )
+    .unwrap();
+    let w = World::load(&yaml).unwrap();
+    assert!((w.raycast(p(0.0, 2.75), 0.0, 10.0).unwrap() - 2.0).abs() < 1e-12);
     // Errors name the line and key.
     std::fs::write(&yaml, "image: m.pgm\nresolution: abc\norigin: [0, 0, 0]\n").unwrap();
     let e = World::load(&yaml).unwrap_err().to_string();
