@@ -50,7 +50,7 @@ fn laser_scan_schema() -> String {
     "goalseek": {{"type": "object", "properties": {{
       "seq": {{"type": "integer"}},
       "host_time_s": {{"type": "number"}},
-      "sensor_time_ms": {{"type": "integer", "description": "null when the sensor gives no time stamp"}},
+      "sensor_time_ms": {{"type": ["integer", "null"], "description": "null when the sensor gives no time stamp"}},
       "first_bearing_rad": {{"type": "number"}},
       "increment_rad": {{"type": "number"}},
       "ray_count": {{"type": "integer"}},

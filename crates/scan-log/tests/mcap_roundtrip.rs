@@ -221,3 +221,78 @@ fn a_cut_recording_gives_its_scans_then_an_error() {
     }
     assert_eq!((n, src.skipped()), (ok.len(), 1));
 }
+
+/// The JSON types `schema` declares for `v` (the `type`, `properties` and `items` keywords,
+/// enough for the recording's schemas), as a list of mismatches.
+fn type_errors(schema: &serde_json::Value, v: &serde_json::Value, at: &str, out: &mut Vec<String>) {
+    use serde_json::Value;
+    let ok = |t: &str| match t {
+        "object" => v.is_object(),
+        "array" => v.is_array(),
+        "string" => v.is_string(),
+        "number" => v.is_number(),
+        "integer" => v.is_i64() || v.is_u64(),
+        "boolean" => v.is_boolean(),
+        "null" => v.is_null(),
+        _ => false,
+    };
+    let fits = match schema.get("type") {
+        Some(Value::String(t)) => ok(t),
+        Some(Value::Array(ts)) => ts.iter().filter_map(Value::as_str).any(ok),
+        _ => true,
+    };
+    if !fits {
+        out.push(format!("{at}: {v} is not {}", schema["type"]));
+    }
+    if let (Some(Value::Object(props)), Value::Object(fields)) = (schema.get("properties"), v) {
+        for (k, sub) in props {
+            if let Some(x) = fields.get(k) {
+                type_errors(sub, x, &format!("{at}.{k}"), out);
+            }
+        }
+    }
+    if let (Some(items), Value::Array(xs)) = (schema.get("items"), v) {
+        for (i, x) in xs.iter().enumerate() {
+            type_errors(items, x, &format!("{at}[{i}]"), out);
+        }
+    }
+}
+
+#[test]
+fn every_message_matches_its_embedded_schema() {
+    // Scans with and without a sensor time stamp (a CARMEN or BreezySLAM replay has none),
+    // with a dropped reading, with and without poses.
+    let g = ScanGeometry::centred(3, 1.0, 0.0, 4.0).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("s.mcap");
+    let mut rec = McapRecorder::create(&path).unwrap();
+    let mut stamped = Scan::from_ranges(&g, &[1.5, 4.0, f64::NAN], 1.0);
+    stamped.sensor_time_ms = Some(1000);
+    let unstamped = Scan::from_ranges(&g, &[1.0, 2.0, 3.0], 2.0);
+    rec.record_scan(
+        &g,
+        &stamped,
+        Some(Pose2::new(0.0, 0.0, 0.0)),
+        Some(Pose2::new(1.0, 2.0, 0.5)),
+    )
+    .unwrap();
+    rec.record_scan(&g, &unstamped, None, None).unwrap();
+    rec.finish().unwrap();
+    let bytes = std::fs::read(&path).unwrap();
+    let mut checked = 0;
+    let mut errors = Vec::new();
+    for m in mcap::MessageStream::new(&bytes).unwrap() {
+        let m = m.unwrap();
+        let schema = m
+            .channel
+            .schema
+            .as_ref()
+            .expect("every channel has a schema");
+        let schema: serde_json::Value = serde_json::from_slice(&schema.data).unwrap();
+        let v: serde_json::Value = serde_json::from_slice(&m.data).unwrap();
+        type_errors(&schema, &v, &m.channel.topic, &mut errors);
+        checked += 1;
+    }
+    assert!(checked >= 4, "{checked} messages");
+    assert!(errors.is_empty(), "{errors:#?}");
+}
