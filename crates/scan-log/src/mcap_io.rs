@@ -50,7 +50,7 @@ fn laser_scan_schema() -> String {
     "goalseek": {{"type": "object", "properties": {{
       "seq": {{"type": "integer"}},
       "host_time_s": {{"type": "number"}},
-      "sensor_time_ms": {{"type": ["integer", "null"], "description": "null when the sensor gives no time stamp"}},
+      "sensor_time_ms": {{"type": "integer", "description": "absent when the sensor gives no time stamp"}},
       "first_bearing_rad": {{"type": "number"}},
       "increment_rad": {{"type": "number"}},
       "ray_count": {{"type": "integer"}},
@@ -142,6 +142,8 @@ impl FoxPose {
 struct ScanExtra {
     seq: u64,
     host_time_s: f64,
+    /// Left out (not `null`, which its schema's `integer` does not allow) when absent.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     sensor_time_ms: Option<u64>,
     first_bearing_rad: f64,
     increment_rad: f64,
