@@ -100,6 +100,9 @@ pub fn read_scan_csv<R: BufRead>(r: R, file: &str) -> Result<(ScanGeometry, Scan
         });
     };
     let first = first.map_err(|e| csv_error(file, 1, "unreadable".into(), Some(e.into())))?;
+    if !first.starts_with('#') {
+        return read_plain_csv(std::iter::once((0, Ok(first))).chain(lines), file);
+    }
     let (geometry, stamp) = parse_geometry_line(&first, file)?;
     let count = geometry.ray_count;
 
@@ -129,6 +132,103 @@ pub fn read_scan_csv<R: BufRead>(r: R, file: &str) -> Result<(ScanGeometry, Scan
         status,
         intensities: None,
         sensor_time_ms: stamp.parse().ok(),
+        host_time_s: 0.0,
+    };
+    Ok((geometry, scan))
+}
+
+/// Largest departure of a bearing from an even spacing, as a share of the increment.
+const SPACING_TOLERANCE: f64 = 0.01;
+
+/// A scan CSV without goalseek's geometry line (a user's own scan): rows
+/// `index,bearing_rad,range_m[,valid]` after an optional header; the geometry comes from the
+/// bearings, which must be evenly spaced. The range limits are 0 and the longest range; a
+/// `valid` of 0, or a range that is empty, not a number or negative, is an error ray.
+fn read_plain_csv(
+    lines: impl Iterator<Item = (usize, std::io::Result<String>)>,
+    file: &str,
+) -> Result<(ScanGeometry, Scan), LogError> {
+    let mut rows: Vec<(f64, f64, bool, usize)> = Vec::new();
+    for (n, line) in lines {
+        let lineno = n + 1;
+        let line =
+            line.map_err(|e| csv_error(file, lineno, "unreadable".into(), Some(e.into())))?;
+        let line = line.trim();
+        if line.is_empty() || line.starts_with('#') || line.starts_with("index") {
+            continue;
+        }
+        let err = |message: String| csv_error(file, lineno, message, None);
+        let cols: Vec<&str> = line.split(',').map(str::trim).collect();
+        if !(3..=4).contains(&cols.len()) {
+            return Err(err(format!(
+                "expected index,bearing_rad,range_m[,valid], found {} columns",
+                cols.len()
+            )));
+        }
+        if cols[0].parse::<usize>().ok() != Some(rows.len()) {
+            return Err(err(format!(
+                "expected ray index {}, found {:?}",
+                rows.len(),
+                cols[0]
+            )));
+        }
+        let bearing = cols[1]
+            .parse::<f64>()
+            .ok()
+            .filter(|b| b.is_finite())
+            .ok_or_else(|| err(format!("bearing_rad {:?} is not a number", cols[1])))?;
+        let range = cols[2].parse::<f64>().unwrap_or(f64::NAN);
+        let valid = match cols.get(3) {
+            None | Some(&"1") => range.is_finite() && range >= 0.0,
+            Some(&"0") => false,
+            Some(other) => return Err(err(format!("valid must be 0 or 1, found {other:?}"))),
+        };
+        rows.push((bearing, range, valid, lineno));
+    }
+    if rows.len() < 2 {
+        return Err(LogError::CsvEmpty {
+            file: file.to_string(),
+        });
+    }
+    let n = rows.len();
+    let first = rows[0].0;
+    let increment = (rows[n - 1].0 - first) / (n - 1) as f64;
+    for (i, &(b, _, _, lineno)) in rows.iter().enumerate() {
+        let off = (b - (first + i as f64 * increment)).abs();
+        if !(increment != 0.0 && off <= SPACING_TOLERANCE * increment.abs()) {
+            return Err(csv_error(
+                file,
+                lineno,
+                format!(
+                    "bearing of ray {i} ({b} rad) is not evenly spaced: the geometry cannot be read from the bearings"
+                ),
+                None,
+            ));
+        }
+    }
+    let max_r = rows
+        .iter()
+        .filter(|r| r.2)
+        .map(|r| r.1)
+        .fold(0.0f64, f64::max)
+        .max(f64::MIN_POSITIVE);
+    let geometry = ScanGeometry::new(first, increment, n, 0.0, max_r)
+        .map_err(|e| csv_error(file, rows[0].3, "bad geometry".into(), Some(e.into())))?;
+    let (ranges_m, status) = rows
+        .iter()
+        .map(|&(_, r, valid, _)| {
+            if valid {
+                (r, RayStatus::Hit)
+            } else {
+                (f64::NAN, RayStatus::Error(0))
+            }
+        })
+        .unzip();
+    let scan = Scan {
+        ranges_m,
+        status,
+        intensities: None,
+        sensor_time_ms: None,
         host_time_s: 0.0,
     };
     Ok((geometry, scan))
@@ -277,5 +377,28 @@ mod tests {
         assert!(format!("{e:#}").contains("y.csv:1"), "{e:#}");
         let e = read_scan_csv("".as_bytes(), "z.csv").unwrap_err();
         assert!(matches!(e, LogError::CsvEmpty { .. }), "{e:?}");
+    }
+
+    #[test]
+    fn a_plain_csv_gives_its_geometry_from_the_bearings() {
+        // Five rays from -0.2 to 0.2 rad, 0.1 rad apart; ray 3 without a return.
+        let text = "index,bearing_rad,range_m,valid\n0,-0.2,1.0,1\n1,-0.1,1.5,1\n2,0.0,2.0,1\n3,0.1,0,0\n4,0.2,2.5,1\n";
+        let (g, s) = read_scan_csv(text.as_bytes(), "mine.csv").unwrap();
+        assert_eq!(g.ray_count, 5);
+        assert!((g.first_bearing_rad - -0.2).abs() < 1e-12);
+        assert!((g.increment_rad - 0.1).abs() < 1e-12);
+        assert_eq!(g.max_range_m, 2.5);
+        assert_eq!(s.status[3], RayStatus::Error(0));
+        assert_eq!(s.ranges_m[4], 2.5);
+        // Three columns, no header, "nan" for no return.
+        let (g3, s3) = read_scan_csv("0,1.0,3\n1,1.5,nan\n2,2.0,4\n".as_bytes(), "x").unwrap();
+        assert!((g3.increment_rad - 0.5).abs() < 1e-12);
+        assert_eq!(s3.status[1], RayStatus::Error(0));
+        // Uneven bearings cannot give a geometry: the error names the row's line.
+        let e = read_scan_csv("0,0.0,1\n1,0.1,1\n2,0.5,1\n".as_bytes(), "bad.csv").unwrap_err();
+        assert!(
+            e.to_string().contains("bad.csv") && e.to_string().contains("evenly"),
+            "{e}"
+        );
     }
 }
