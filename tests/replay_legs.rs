@@ -10,7 +10,7 @@ use robot_app::cmd::replay::{ReplayArgs, run_to};
 use robot_app::cmd::scan::ScanFormat;
 use robot_app::cmd::sim::{SimSpec, record_run};
 use robot_app::outputs::Reason;
-use robot_app::record::{Recorder, RunSettings, leg_summaries, replay_loop};
+use robot_app::record::{Recorder, RunSettings, replay_loop};
 use robot_app::runloop::run_loop;
 use robot_base::LoggingBase;
 use scan_log::{LEGS_METADATA, RUN_METADATA, read_mcap};
@@ -190,7 +190,7 @@ fn sim_record_then_replay_loop_reports_the_same_legs() {
     );
 
     // A recording whose legs differ in one bit is reported as different.
-    let mut legs = leg_summaries(&live.log);
+    let mut legs = live.log.leg_summaries();
     let b = legs.iter_mut().find_map(|l| l.point_b.as_mut()).unwrap();
     b[0] = f64::from_bits(b[0].to_bits() + 1);
     let bad = dir.path().join("bad.mcap");

@@ -4,7 +4,7 @@
 use navigator::{Leg, Monitor, Navigator, Outcome, Params};
 use scan_types::{LaserSource, MotionBase, Pose2, Scan, WorldPoint};
 
-use crate::outputs::{LegRecord, RunLog};
+use scan_log::{LegRecord, RunLog};
 
 /// Read-only access to what only a simulator knows, for evaluation.
 pub trait Evaluation {

@@ -3,6 +3,7 @@
 
 mod outputs {
     use robot_app::outputs::*;
+    use scan_log::{LegRecord, RunLog, trajectory_csv, tum, write_trajectory};
     use scan_types::{Pose2, WorldPoint};
     use std::f64::consts::FRAC_PI_2;
 
@@ -119,8 +120,8 @@ mod outputs {
 }
 
 mod plot {
-    use robot_app::outputs::{LegRecord, RunLog};
     use robot_app::plot::*;
+    use scan_log::{LegRecord, RunLog};
     use scan_types::{Pose2, WorldPoint};
 
     fn log() -> RunLog {
@@ -327,15 +328,6 @@ mod batch_table {
     use robot_app::cmd::batch::table::*;
     use robot_app::outputs::Reason;
     use sim_laser::WorldKind;
-
-    #[test]
-    fn percentiles_by_hand() {
-        let mut v = vec![4.0, 1.0, 3.0, 2.0];
-        assert_eq!(median(&mut v), 2.5);
-        let mut v = vec![0.0, 10.0];
-        assert!((percentile(&mut v, 0.9) - 9.0).abs() < 1e-12);
-        assert!(median(&mut []).is_nan());
-    }
 
     fn row(group: &str, reached: bool, err: f64) -> BatchRow {
         BatchRow {

@@ -102,7 +102,7 @@ pub fn run_to<W: Write>(args: &ReplayArgs, out: &mut W) -> anyhow::Result<()> {
 /// differ from the recorded ones or if the replayed run does not reach the target (as `sim`
 /// fails then; a cut recording ends in `sensor_failure`).
 fn run_loop<W: Write>(args: &ReplayArgs, out: &mut W) -> anyhow::Result<()> {
-    use crate::record::{leg_summaries, read_settings, replay_loop};
+    use crate::record::{read_settings, replay_loop};
     let settings = read_settings(&args.file)?;
     let replay = replay_loop(&args.file, &settings.config, settings.start, settings.goal)?;
     let o = &replay.run.outcome;
@@ -119,7 +119,7 @@ fn run_loop<W: Write>(args: &ReplayArgs, out: &mut W) -> anyhow::Result<()> {
     )?;
     if let Some(dir) = &args.out {
         std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
-        crate::outputs::write_trajectory(dir, log)?;
+        scan_log::write_trajectory(dir, log)?;
         o.grid
             .write_map_server(dir, "map")
             .with_context(|| format!("writing map.pgm/map.yaml in {}", dir.display()))?;
@@ -127,7 +127,7 @@ fn run_loop<W: Write>(args: &ReplayArgs, out: &mut W) -> anyhow::Result<()> {
             .to_png(&dir.join("map.png"))
             .with_context(|| format!("writing map.png in {}", dir.display()))?;
     }
-    let compared = compare_legs(&args.file, &leg_summaries(log), o.legs_driven, out);
+    let compared = compare_legs(&args.file, &log.leg_summaries(), o.legs_driven, out);
     out.flush()?;
     compared?;
     if o.reason != crate::outputs::Reason::Reached {
