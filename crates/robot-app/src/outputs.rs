@@ -62,4 +62,3 @@ pub fn write_summary(dir: &Path, summary: &Summary) -> anyhow::Result<()> {
     text.push('\n');
     write_atomic(&dir.join("summary.json"), text.as_bytes())
 }
-

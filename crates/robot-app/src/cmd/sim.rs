@@ -9,8 +9,8 @@ use sim_laser::{SensorPreset, SimSetup, paper_start, paper_target};
 
 use crate::config::Params;
 use crate::outputs::{Reason, Summary, write_summary};
-use scan_log::write_trajectory;
 use crate::runloop::run_loop;
+use scan_log::write_trajectory;
 
 /// A simulated run counts as a success when the true position ends this close to the target.
 pub const SUCCESS_RADIUS_M: f64 = 0.3;
