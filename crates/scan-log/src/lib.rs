@@ -58,7 +58,8 @@ pub use playback::{GeometryOverride, LoopingLog, RecordedLaser, RecordedTruth, o
 pub use record::LogRecord;
 pub use run_log::{LegRecord, RunLog, trajectory_csv, tum, write_trajectory};
 pub use run_meta::{
-    LEGS_METADATA, LegSummary, RUN_METADATA, RunSettings, legs_metadata, read_recorded_legs,
+    LEGS_METADATA, LegSummary, RUN_METADATA, RunSettings, leg_difference, legs_metadata,
+    read_recorded_legs,
 };
 pub use source::{LogFormat, LogOptions, LogReader, LogSource, open_text};
 pub use text::{TextFormat, TextLog};

@@ -152,12 +152,7 @@ fn compare_legs<W: Write>(
         writeln!(out, "the recording holds no legs to compare with")?;
         return Ok(());
     };
-    let first_diff = recorded
-        .iter()
-        .zip(replayed)
-        .position(|(a, b)| a != b)
-        .or_else(|| (recorded.len() != replayed.len()).then(|| recorded.len().min(replayed.len())));
-    let Some(i) = first_diff else {
+    let Some(difference) = scan_log::leg_difference(&recorded, replayed) else {
         writeln!(
             out,
             "same legs as recorded: {} rows (start + {legs_driven} legs), every estimate, landmark and point B bit for bit; recorded end: {reason}",
@@ -165,15 +160,5 @@ fn compare_legs<W: Write>(
         )?;
         return Ok(());
     };
-    let row = |legs: &[scan_log::LegSummary], what: &str| {
-        legs.get(i).map_or_else(
-            || format!("{what} nothing ({} rows in all)", legs.len()),
-            |l| format!("{what} {l}"),
-        )
-    };
-    anyhow::bail!(
-        "the replayed legs differ from the recorded ones at row {i}: {}; {}",
-        row(&recorded, "recorded"),
-        row(replayed, "replayed")
-    )
+    anyhow::bail!("the replayed legs differ from the recorded ones at {difference}")
 }
