@@ -8,13 +8,11 @@ use std::path::Path;
 
 use anyhow::Context;
 use robot_base::{Command, LoggingBase, NoMotion};
-use scan_log::{
-    GeometryOverride, LogError, LogSource, McapRecorder, RecordedLaser, RecordedTruth, RunLog,
-};
+use scan_log::{GeometryOverride, LogError, LogSource, McapRecorder, RecordedLaser, RunLog};
 use scan_types::{Pose2, ScanGeometry, WorldPoint};
 
 use crate::config::Params;
-use crate::runloop::{Evaluation, LoopRun, run_loop};
+use crate::runloop::{LoopRun, run_loop};
 
 /// A goalseek MCAP recording ([`McapRecorder`], whose methods it has) that also takes the legs
 /// of a run.
@@ -83,16 +81,6 @@ pub fn read_settings(path: &Path) -> anyhow::Result<RunSettings> {
         .validate()
         .with_context(|| path.display().to_string())?;
     Ok(settings)
-}
-
-// The recorded true poses as the loop's evaluation; a recording knows no collisions.
-impl Evaluation for RecordedTruth {
-    fn true_pose(&self) -> Pose2 {
-        self.pose().unwrap_or_default()
-    }
-    fn collisions(&self) -> usize {
-        0
-    }
 }
 
 /// A recording replayed through the loop.
