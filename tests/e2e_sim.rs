@@ -134,7 +134,13 @@ fn paper_scenario_reaches_the_target_and_writes_every_output() {
     let covered = (last[1] - START.0).hypot(last[2] - START.1);
     assert!(s["path_length_m"].as_f64().unwrap() >= 0.95 * covered);
 
-    // trajectory.csv: a header and the same rows, truth columns equal to truth.tum.
+    check_trajectory_csv(d, &truth, legs);
+    check_maps_and_figure(d);
+}
+
+/// trajectory.csv: a header and one row per leg end, truth columns equal to truth.tum; the
+/// first leg with a landmark fixes a landmark and a point B.
+fn check_trajectory_csv(d: &Path, truth: &[[f64; 5]], legs: usize) {
     let csv = read(d, "trajectory.csv");
     let mut lines = csv.lines();
     let header: Vec<&str> = lines.next().unwrap().split(',').collect();
@@ -149,14 +155,15 @@ fn paper_scenario_reaches_the_target_and_writes_every_output() {
         let ty: f64 = r[5].parse().unwrap();
         assert!((tx - truth[i][1]).abs() < 2e-6 && (ty - truth[i][2]).abs() < 2e-6);
     }
-    // The first leg with a landmark fixes a landmark and a point B.
     assert!(
         rows.iter()
             .skip(1)
             .any(|r| !r[7].is_empty() && !r[9].is_empty())
     );
+}
 
-    // Maps: map_server PGM + YAML, and PNG; the figure as PNG and SVG.
+/// Maps: map_server PGM + YAML, and PNG; the figure as PNG and SVG; no temporary file left.
+fn check_maps_and_figure(d: &Path) {
     let pgm = std::fs::read(d.join("map.pgm")).unwrap();
     assert!(pgm.starts_with(b"P5"));
     let yaml = read(d, "map.yaml");

@@ -11,12 +11,14 @@
 
 use std::sync::Arc;
 
-use landmarks::{DetectParams, SelectParams, TrackParams, TrackUpdate, Tracker, detect, select};
-use localiser::{ArrivalParams, ArrivalRule, check_arrival, triangle};
+use landmarks::{
+    DetectParams, Landmark, SelectParams, TrackParams, TrackUpdate, Tracker, detect, select,
+};
+use localiser::{ArrivalParams, ArrivalRule, Triangle, check_arrival, triangle};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use scan_types::{LaserSource, MotionBase, Pose2, WorldPoint};
-use sim_laser::{SensorPreset, Simulation, World};
+use sim_laser::{SensorPreset, SimBase, SimLaser, Simulation, TruthHandle, World};
 
 #[derive(Clone, Copy)]
 struct Rules {
@@ -36,27 +38,31 @@ struct Outcome {
     blocked: usize,
 }
 
+/// A random free start pose with room to drive (at least 2 m clear ahead), as after the
+/// planner's choice; `None` when the draw is not one.
+fn random_start(world: &World, rng: &mut ChaCha8Rng) -> Option<Pose2> {
+    let (lo, hi) = world.bounds();
+    let x = rng.random_range(lo.x_m() + 0.5..hi.x_m() - 0.5);
+    let y = rng.random_range(lo.y_m() + 0.5..hi.y_m() - 0.5);
+    if world.disc_collides(WorldPoint::new(x, y), 0.45) {
+        return None;
+    }
+    let theta = rng.random_range(-std::f64::consts::PI..std::f64::consts::PI);
+    let clear = world
+        .raycast(WorldPoint::new(x, y), theta, 10.0)
+        .unwrap_or(10.0);
+    (clear >= 2.0).then(|| Pose2::new(x, y, theta))
+}
+
 fn run(world: &Arc<World>, rules: &Rules, trials: usize, seed: u64) -> Outcome {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let (lo, hi) = world.bounds();
     let mut out = Outcome::default();
     let mut done = 0;
     while done < trials {
-        let x = rng.random_range(lo.x_m() + 0.5..hi.x_m() - 0.5);
-        let y = rng.random_range(lo.y_m() + 0.5..hi.y_m() - 0.5);
-        if world.disc_collides(WorldPoint::new(x, y), 0.45) {
+        let Some(start) = random_start(world, &mut rng) else {
             continue;
-        }
-        let theta = rng.random_range(-std::f64::consts::PI..std::f64::consts::PI);
-        // A heading with room to drive (at least 2 m clear), as after the planner's choice.
-        if world
-            .raycast(WorldPoint::new(x, y), theta, 10.0)
-            .unwrap_or(10.0)
-            < 2.0
-        {
-            continue;
-        }
-        let start = Pose2::new(x, y, theta);
+        };
+        let theta = start.theta_rad;
         done += 1;
         let sim = Simulation::with_preset(world.clone(), SensorPreset::Paper, start, rng.random());
         let (mut laser, mut base, truth) = sim.split();
@@ -73,40 +79,7 @@ fn run(world: &Arc<World>, rules: &Rules, trials: usize, seed: u64) -> Outcome {
             out.blocked += 1;
             continue;
         }
-        let mut tracker = Tracker::new(l, rules.track);
-        let mut d = 0.0;
-        let mut arrived = false;
-        while d < tri.ob_m + 0.5 {
-            base.forward(0.05).unwrap();
-            d += 0.05;
-            let scan = laser.next_scan().unwrap();
-            match tracker.update(&g, &scan, d) {
-                TrackUpdate::Tracked(now) => {
-                    if let Some(a) =
-                        check_arrival(&tri, &g, now.range_m, now.bearing_rad, &rules.arrival)
-                    {
-                        out.errors
-                            .push(a.pose.position().distance_m(&truth.pose().position()));
-                        arrived = true;
-                        break;
-                    }
-                }
-                TrackUpdate::Predicted(_) => {}
-                TrackUpdate::Lost => {
-                    if std::env::var("LMK_DEBUG").is_ok_and(|v| v == rules.name) {
-                        println!(
-                            "  lost at {d:.2} of OB {:.2}: {:?} first seen {:.2} m {:.1} deg, last {:?}",
-                            tri.ob_m,
-                            l.kind,
-                            l.range_m,
-                            l.bearing_rad.to_degrees(),
-                            tracker.last()
-                        );
-                    }
-                    break;
-                }
-            }
-        }
+        let arrived = drive_leg(&mut laser, &mut base, &truth, rules, l, &tri, &mut out);
         if truth.collisions() > 0 {
             out.collided += 1;
             if arrived {
@@ -119,6 +92,53 @@ fn run(world: &Arc<World>, rules: &Rules, trials: usize, seed: u64) -> Outcome {
     out
 }
 
+/// Drives the leg in 5 cm steps, tracking `l`, until `check_arrival` fires (its error against
+/// the truth pushed on `out.errors`: true) or the landmark is lost or B passed (false).
+fn drive_leg(
+    laser: &mut SimLaser,
+    base: &mut SimBase,
+    truth: &TruthHandle,
+    rules: &Rules,
+    l: Landmark,
+    tri: &Triangle,
+    out: &mut Outcome,
+) -> bool {
+    let g = *laser.geometry();
+    let mut tracker = Tracker::new(l, rules.track);
+    let mut d = 0.0;
+    while d < tri.ob_m + 0.5 {
+        base.forward(0.05).unwrap();
+        d += 0.05;
+        let scan = laser.next_scan().unwrap();
+        match tracker.update(&g, &scan, d) {
+            TrackUpdate::Tracked(now) => {
+                if let Some(a) =
+                    check_arrival(tri, &g, now.range_m, now.bearing_rad, &rules.arrival)
+                {
+                    out.errors
+                        .push(a.pose.position().distance_m(&truth.pose().position()));
+                    return true;
+                }
+            }
+            TrackUpdate::Predicted(_) => {}
+            TrackUpdate::Lost => {
+                if std::env::var("LMK_DEBUG").is_ok_and(|v| v == rules.name) {
+                    println!(
+                        "  lost at {d:.2} of OB {:.2}: {:?} first seen {:.2} m {:.1} deg, last {:?}",
+                        tri.ob_m,
+                        l.kind,
+                        l.range_m,
+                        l.bearing_rad.to_degrees(),
+                        tracker.last()
+                    );
+                }
+                return false;
+            }
+        }
+    }
+    false
+}
+
 fn quantile(v: &[f64], q: f64) -> f64 {
     let mut v = v.to_vec();
     v.sort_by(f64::total_cmp);
@@ -128,9 +148,9 @@ fn quantile(v: &[f64], q: f64) -> f64 {
     v[((v.len() - 1) as f64 * q).round() as usize]
 }
 
-#[test]
-fn each_rule_on_leg_error() {
-    let world = Arc::new(World::paper());
+/// The rule sets compared: the paper's, each goalseek rule added to it in turn, goalseek's
+/// defaults (index 8) and goalseek with one rule taken away.
+fn rule_sets() -> Vec<Rules> {
     let paper = Rules {
         name: "paper as written",
         detect: DetectParams::paper(),
@@ -144,14 +164,7 @@ fn each_rule_on_leg_error() {
         f(&mut r);
         r
     };
-    let goalseek = Rules {
-        name: "goalseek defaults",
-        detect: DetectParams::default(),
-        select: SelectParams::default(),
-        track: TrackParams::default(),
-        arrival: ArrivalParams::default(),
-    };
-    let sets = [
+    let mut sets = vec![
         paper,
         with("+ reject range-limit hits", &|r| {
             r.detect.reject_near_range_limit = true;
@@ -175,6 +188,21 @@ fn each_rule_on_leg_error() {
             r.arrival = ArrivalParams::default()
         }),
         with("+ edge refine", &|r| r.detect.edge_refine = true),
+    ];
+    sets.extend(goalseek_variants());
+    sets
+}
+
+/// goalseek's defaults and goalseek with one rule taken away.
+fn goalseek_variants() -> Vec<Rules> {
+    let goalseek = Rules {
+        name: "goalseek defaults",
+        detect: DetectParams::default(),
+        select: SelectParams::default(),
+        track: TrackParams::default(),
+        arrival: ArrivalParams::default(),
+    };
+    vec![
         goalseek,
         Rules {
             name: "goalseek, paper arrival (side ray)",
@@ -210,7 +238,13 @@ fn each_rule_on_leg_error() {
             },
             ..goalseek
         },
-    ];
+    ]
+}
+
+#[test]
+fn each_rule_on_leg_error() {
+    let world = Arc::new(World::paper());
+    let sets = rule_sets();
     // More trials for steadier figures: LMK_TRIALS=200.
     let trials = std::env::var("LMK_TRIALS")
         .ok()

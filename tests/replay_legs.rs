@@ -6,11 +6,13 @@
 //! and its settings, so it must give the same commands and the same legs, bit for bit.
 #![allow(clippy::print_stderr, clippy::print_stdout)] // tests report to the terminal
 
+use std::path::Path;
+
 use robot_app::cmd::replay::{ReplayArgs, run_to};
 use robot_app::cmd::scan::ScanFormat;
 use robot_app::cmd::sim::{SimSpec, record_run};
 use robot_app::outputs::Reason;
-use robot_app::record::{Recorder, RunSettings, leg_summaries, replay_loop};
+use robot_app::record::{Recorder, RunSettings, replay_loop};
 use robot_app::runloop::run_loop;
 use robot_base::LoggingBase;
 use scan_log::{LEGS_METADATA, RUN_METADATA, read_mcap};
@@ -98,39 +100,7 @@ fn replayed_paper_run_gives_the_same_commands_and_legs() {
     assert_ne!(live.reason, Reason::Collision, "{}", live.note);
     assert!(live.legs_driven >= 2, "{} legs", live.legs_driven);
     assert_eq!(written.len(), live.scans);
-
-    // The recording reads back bit for bit: scans, true poses, estimates.
-    let back: Vec<_> = read_mcap(&path)
-        .unwrap()
-        .into_iter()
-        .collect::<Result<_, _>>()
-        .unwrap();
-    assert_eq!(back.len(), written.len());
-    for (k, (r, (s, t, e))) in back.iter().zip(&written).enumerate() {
-        assert_same_scan(&r.scan, s, k);
-        assert_eq!(r.true_pose.map(pose_bits), Some(pose_bits(*t)), "scan {k}");
-        assert_eq!(r.pose.map(pose_bits), Some(pose_bits(*e)), "scan {k}");
-    }
-    // The first scan is taken at the start, where estimate and truth agree.
-    assert_eq!(pose_bits(written[0].1), pose_bits(spec.setup.start));
-    assert_eq!(pose_bits(written[0].2), pose_bits(spec.setup.start));
-    // The estimate follows the robot between leg ends (moved by each command), so nearly
-    // every scan carries a new estimate.
-    let distinct = written.windows(2).filter(|w| w[0].2 != w[1].2).count();
-    assert!(
-        distinct * 10 >= written.len() * 9,
-        "{distinct} of {}",
-        written.len()
-    );
-    let worst = written
-        .iter()
-        .map(|(_, t, e)| t.position().distance_m(&e.position()))
-        .fold(0.0, f64::max);
-    println!(
-        "{} scans, {} legs; worst estimate error at a scan {worst:.3} m",
-        written.len(),
-        live.legs_driven
-    );
+    check_recording(&path, &written, spec.setup.start, live.legs_driven);
 
     // Replay through the loop.
     let replay = replay_loop(&path, cfg, spec.setup.start, spec.goal).unwrap();
@@ -146,6 +116,41 @@ fn replayed_paper_run_gives_the_same_commands_and_legs() {
     assert_eq!(r.first_leg, live.first_leg);
     // Every leg: estimate, recorded truth, landmark, point B and the scan's world points.
     assert_eq!(replay.run.log, live_run.log);
+}
+
+/// The recording at `path` reads back bit for bit (scans, true poses, estimates) as `written`,
+/// starts at `start`, and carries a new estimate at nearly every scan.
+fn check_recording(path: &Path, written: &[(Scan, Pose2, Pose2)], start: Pose2, legs: usize) {
+    let back: Vec<_> = read_mcap(path)
+        .unwrap()
+        .into_iter()
+        .collect::<Result<_, _>>()
+        .unwrap();
+    assert_eq!(back.len(), written.len());
+    for (k, (r, (s, t, e))) in back.iter().zip(written).enumerate() {
+        assert_same_scan(&r.scan, s, k);
+        assert_eq!(r.true_pose.map(pose_bits), Some(pose_bits(*t)), "scan {k}");
+        assert_eq!(r.pose.map(pose_bits), Some(pose_bits(*e)), "scan {k}");
+    }
+    // The first scan is taken at the start, where estimate and truth agree.
+    assert_eq!(pose_bits(written[0].1), pose_bits(start));
+    assert_eq!(pose_bits(written[0].2), pose_bits(start));
+    // The estimate follows the robot between leg ends (moved by each command), so nearly
+    // every scan carries a new estimate.
+    let distinct = written.windows(2).filter(|w| w[0].2 != w[1].2).count();
+    assert!(
+        distinct * 10 >= written.len() * 9,
+        "{distinct} of {}",
+        written.len()
+    );
+    let worst = written
+        .iter()
+        .map(|(_, t, e)| t.position().distance_m(&e.position()))
+        .fold(0.0, f64::max);
+    println!(
+        "{} scans, {legs} legs; worst estimate error at a scan {worst:.3} m",
+        written.len()
+    );
 }
 
 /// The `robot-app sim --record` path and `robot-app replay FILE --loop`.
@@ -190,7 +195,7 @@ fn sim_record_then_replay_loop_reports_the_same_legs() {
     );
 
     // A recording whose legs differ in one bit is reported as different.
-    let mut legs = leg_summaries(&live.log);
+    let mut legs = live.log.leg_summaries();
     let b = legs.iter_mut().find_map(|l| l.point_b.as_mut()).unwrap();
     b[0] = f64::from_bits(b[0].to_bits() + 1);
     let bad = dir.path().join("bad.mcap");

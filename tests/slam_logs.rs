@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use robot_app::cmd::slam::{load_params, run_log, write_outputs};
-use robot_app::outputs::tum;
+use scan_log::tum;
 use slam::SlamRun;
 
 fn shared(rel: &str) -> Option<PathBuf> {

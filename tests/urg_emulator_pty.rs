@@ -172,10 +172,20 @@ fn emulator_answers_the_urg_library_exchanges_byte_for_byte() {
     assert_eq!(exchange(&mut port, b"SCIP2.0\n"), b"SCIP2.0\n0\n\n");
     assert_eq!(exchange(&mut port, b"QT\n"), b"QT\n00P\n\n");
 
-    // PP and VV are byte-identical to the real URG-04LX; II has the same lines but TIME.
-    let pp = exchange(&mut port, b"PP\n");
-    let vv = exchange(&mut port, b"VV\n");
-    let ii = exchange(&mut port, b"II\n");
+    check_info_replies(&mut port);
+    check_scans(&mut port);
+    check_streaming(&mut port);
+    check_time_stamps(&mut port);
+}
+
+/// The emulator's serial port, as urg_library opens it.
+type Port = Box<dyn serialport::SerialPort>;
+
+/// PP and VV are byte-identical to the real URG-04LX; II has the same lines but TIME.
+fn check_info_replies(port: &mut Port) {
+    let pp = exchange(port, b"PP\n");
+    let vv = exchange(port, b"VV\n");
+    let ii = exchange(port, b"II\n");
     // urg_library's line counts: PP 10, VV 7, II 9 (after the echo, blank line included).
     let lines = |r: &[u8]| r.iter().filter(|&&c| c == b'\n').count() - 1;
     assert_eq!((lines(&pp), lines(&vv), lines(&ii)), (10, 7, 9));
@@ -191,11 +201,13 @@ fn emulator_answers_the_urg_library_exchanges_byte_for_byte() {
         };
         assert_eq!(keep(&ii), keep(&cap[3]));
     }
+}
 
-    // Laser on, then one scan (GD): status 00, time stamp line, 32 data lines, blank line.
-    assert_eq!(exchange(&mut port, b"BM\n"), b"BM\n00P\n\n");
-    assert_eq!(exchange(&mut port, b"BM\n"), b"BM\n02R\n\n");
-    let gd = exchange(&mut port, b"GD0044072501\n");
+/// Laser on, then one scan (GD): status 00, time stamp line, 32 data lines, blank line; GS too.
+fn check_scans(port: &mut Port) {
+    assert_eq!(exchange(port, b"BM\n"), b"BM\n00P\n\n");
+    assert_eq!(exchange(port, b"BM\n"), b"BM\n02R\n\n");
+    let gd = exchange(port, b"GD0044072501\n");
     let gd_lines: Vec<&[u8]> = gd.split(|&c| c == b'\n').collect();
     assert_eq!(gd_lines[0], b"GD0044072501");
     assert_eq!(gd_lines[1], b"00P");
@@ -205,45 +217,47 @@ fn emulator_answers_the_urg_library_exchanges_byte_for_byte() {
         assert_eq!(urg_driver::codec::checksum(body), sum[0]);
     }
     // GS (2-character values) too.
-    let gs = exchange(&mut port, b"GS0044072501\n");
+    let gs = exchange(port, b"GS0044072501\n");
     assert!(gs.starts_with(b"GS0044072501\n00P\n"));
+}
 
-    // Streaming: the acknowledgement, then scans whose echo counts down; QT stops it.
+/// Streaming: the acknowledgement, then scans whose echo counts down; QT stops it.
+fn check_streaming(port: &mut Port) {
     assert_eq!(
-        exchange(&mut port, b"MD0044072501002\n"),
+        exchange(port, b"MD0044072501002\n"),
         b"MD0044072501002\n00P\n\n"
     );
-    assert!(read_reply(&mut port).starts_with(b"MD0044072501001\n99b\n"));
-    assert!(read_reply(&mut port).starts_with(b"MD0044072501000\n99b\n"));
+    assert!(read_reply(port).starts_with(b"MD0044072501001\n99b\n"));
+    assert!(read_reply(port).starts_with(b"MD0044072501000\n99b\n"));
     assert_eq!(
-        exchange(&mut port, b"MD0044072501000\n"),
+        exchange(port, b"MD0044072501000\n"),
         b"MD0044072501000\n00P\n\n"
     );
-    assert!(read_reply(&mut port).starts_with(b"MD0044072501000\n99b\n"));
+    assert!(read_reply(port).starts_with(b"MD0044072501000\n99b\n"));
     port.write_all(b"QT\n").unwrap();
     let mut seen_qt = false;
     for _ in 0..4 {
-        if read_reply(&mut port) == b"QT\n00P\n\n" {
+        if read_reply(port) == b"QT\n00P\n\n" {
             seen_qt = true;
             break;
         }
     }
     assert!(seen_qt, "QT acknowledged within a few in-flight scans");
+}
 
-    // Time stamps: TM0, TM1 (one 4-character time line with its checksum), TM2.
-    assert_eq!(exchange(&mut port, b"TM0\n"), b"TM0\n00P\n\n");
-    let tm1 = exchange(&mut port, b"TM1\n");
+/// Time stamps: TM0, TM1 (one 4-character time line with its checksum), TM2; the time-adjust
+/// mode's connect; intensities refused on a URG-04LX.
+fn check_time_stamps(port: &mut Port) {
+    assert_eq!(exchange(port, b"TM0\n"), b"TM0\n00P\n\n");
+    let tm1 = exchange(port, b"TM1\n");
     assert_eq!(&tm1[..8], b"TM1\n00P\n");
     assert_eq!(tm1.len(), 8 + 5 + 2);
     assert_eq!(urg_driver::codec::checksum(&tm1[8..12]), tm1[12]);
     // A connect while in time-adjust mode: QT answers 0Ee, and TM2 leaves the mode.
-    assert_eq!(exchange(&mut port, b"QT\n"), b"QT\n0Ee\n\n");
-    assert_eq!(exchange(&mut port, b"TM2\n"), b"TM2\n00P\n\n");
-    assert_eq!(exchange(&mut port, b"QT\n"), b"QT\n00P\n\n");
+    assert_eq!(exchange(port, b"QT\n"), b"QT\n0Ee\n\n");
+    assert_eq!(exchange(port, b"TM2\n"), b"TM2\n00P\n\n");
+    assert_eq!(exchange(port, b"QT\n"), b"QT\n00P\n\n");
     // Intensities on a URG-04LX: 0E, and the device keeps working.
-    assert_eq!(
-        exchange(&mut port, b"GE0044072501\n"),
-        b"GE0044072501\n0Ee\n\n"
-    );
-    assert_eq!(exchange(&mut port, b"QT\n"), b"QT\n00P\n\n");
+    assert_eq!(exchange(port, b"GE0044072501\n"), b"GE0044072501\n0Ee\n\n");
+    assert_eq!(exchange(port, b"QT\n"), b"QT\n00P\n\n");
 }

@@ -6,6 +6,7 @@
 //!   ray's line, the disc, the quadratic, its discriminant). The definition; slow.
 //! - [`Expander`]: the fast kernel, identical results within 1e-9 m, no allocation per scan.
 //! - [`is_blocked`]: a ray is not a safe path for a leg longer than its clearance.
+//! - [`write_clearance_csv`]: every ray's range, clearance and blocked flag as CSV.
 //!
 //! Edge cases (see `docs/expansion.md`): max-range and invalid readings are never obstacles;
 //! an invalid ray's own free length is 0; a tangent ray touches its disc (blocked there); a
@@ -33,11 +34,13 @@ mod definition;
 mod error;
 mod fast;
 mod reference;
+mod table;
 
 pub use definition::{free_length_m, ray_disc_entry_m};
 pub use error::ExpansionError;
 pub use fast::Expander;
 pub use reference::clearances_reference;
+pub use table::write_clearance_csv;
 
 use scan_types::{Scan, ScanGeometry};
 

@@ -37,7 +37,7 @@ pub use params::{
     HeadingRule, LandmarkParams, LocaliserParams, LoopParams, Method, Params, PlanRule,
     PlanningParams, RobotParams, TrackingParams, TravelRule,
 };
-pub use run::{Monitor, NoMonitor, run};
+pub use run::{Monitor, NoMonitor, ScanHook, TruthMonitor, run};
 
 /// Largest start or goal coordinate the navigator accepts, metres (1000 km).
 pub const MAX_COORD_M: f64 = 1e6;

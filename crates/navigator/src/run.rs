@@ -1,6 +1,6 @@
 //! The blocking driver: a [`Navigator`] run against any [`LaserSource`] and [`MotionBase`].
 
-use scan_types::{LaserSource, MotionBase, Pose2, Scan};
+use scan_types::{GroundTruth, LaserSource, MotionBase, Pose2, Scan};
 
 use crate::{Action, Leg, Navigator, Outcome, Reason};
 
@@ -28,6 +28,61 @@ pub trait Monitor {
 pub struct NoMonitor;
 
 impl Monitor for NoMonitor {}
+
+/// Called with every scan and the estimate of the pose it was taken at.
+pub type ScanHook<'a> = &'a mut dyn FnMut(&Scan, &Pose2);
+
+/// A [`Monitor`] for evaluation: records the truth's pose at every leg end, ends the run on
+/// the truth's first collision or when `stop` gives a note, and shows every scan to a hook.
+pub struct TruthMonitor<'a> {
+    truth: Option<&'a dyn GroundTruth>,
+    hook: Option<ScanHook<'a>>,
+    stop: fn() -> Option<String>,
+    truths: Vec<Option<Pose2>>,
+}
+
+impl<'a> TruthMonitor<'a> {
+    /// Watches `truth` (if any), calls `hook` (if any) with every scan and `stop` before every
+    /// action.
+    pub fn new(
+        truth: Option<&'a dyn GroundTruth>,
+        hook: Option<ScanHook<'a>>,
+        stop: fn() -> Option<String>,
+    ) -> Self {
+        Self {
+            truth,
+            hook,
+            stop,
+            truths: Vec::new(),
+        }
+    }
+
+    /// The true pose at every leg end so far, in order (`None` without a truth).
+    pub fn truths(&self) -> &[Option<Pose2>] {
+        &self.truths
+    }
+}
+
+impl Monitor for TruthMonitor<'_> {
+    fn scan(&mut self, scan: &Scan, estimate: &Pose2) {
+        if let Some(f) = self.hook.as_mut() {
+            f(scan, estimate);
+        }
+    }
+    fn leg(&mut self, _leg: &Leg) {
+        self.truths.push(self.truth.map(|e| e.true_pose()));
+    }
+    fn interrupted(&mut self) -> Option<String> {
+        (self.stop)()
+    }
+    fn collision(&mut self) -> Option<String> {
+        let e = self.truth?;
+        (e.collisions() > 0).then(|| {
+            let t = e.true_pose();
+            format!("collision near ({:.2}, {:.2})", t.x_m, t.y_m)
+        })
+    }
+}
 
 /// Runs `nav` to its end: scans from `laser`, motions on `base`, and `stop` sent to the base
 /// however the run ends.

@@ -10,7 +10,8 @@ use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
 use plotters::style::FontStyle;
 
-use crate::outputs::{RunLog, write_atomic};
+use crate::outputs::write_atomic;
+use scan_log::RunLog;
 
 /// DejaVu Sans, shipped with the repository (bitmap text needs a registered font).
 const FONT: &[u8] = include_bytes!("../assets/DejaVuSans.ttf");
@@ -265,7 +266,7 @@ fn draw_ends<DB: DrawingBackend>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::outputs::{LegRecord, RunLog};
+    use scan_log::{LegRecord, RunLog};
     use scan_types::{Pose2, WorldPoint};
 
     #[test]

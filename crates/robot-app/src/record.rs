@@ -8,14 +8,11 @@ use std::path::Path;
 
 use anyhow::Context;
 use robot_base::{Command, LoggingBase, NoMotion};
-use scan_log::{
-    GeometryOverride, LegSummary, LogError, LogSource, McapRecorder, RecordedLaser, RecordedTruth,
-};
+use scan_log::{GeometryOverride, LogError, LogSource, McapRecorder, RecordedLaser, RunLog};
 use scan_types::{Pose2, ScanGeometry, WorldPoint};
 
 use crate::config::Params;
-use crate::outputs::RunLog;
-use crate::runloop::{Evaluation, LoopRun, run_loop};
+use crate::runloop::{LoopRun, run_loop};
 
 /// A goalseek MCAP recording ([`McapRecorder`], whose methods it has) that also takes the legs
 /// of a run.
@@ -31,7 +28,7 @@ impl Recorder {
 
     /// Writes the legs of a finished run ([`scan_log::LEGS_METADATA`]).
     pub fn write_legs(&mut self, log: &RunLog, reason: &str) -> Result<(), LogError> {
-        self.0.write_legs(&leg_summaries(log), reason)
+        self.0.write_legs(&log.leg_summaries(), reason)
     }
 
     /// Closes the file and moves it to its final name; returns the number of scans.
@@ -84,30 +81,6 @@ pub fn read_settings(path: &Path) -> anyhow::Result<RunSettings> {
         .validate()
         .with_context(|| path.display().to_string())?;
     Ok(settings)
-}
-
-/// The legs of a run's log.
-pub fn leg_summaries(log: &RunLog) -> Vec<LegSummary> {
-    let xy = |p: WorldPoint| [p.x_m(), p.y_m()];
-    log.legs
-        .iter()
-        .map(|l| LegSummary {
-            leg: l.leg,
-            estimate: [l.estimate.x_m, l.estimate.y_m, l.estimate.theta_rad],
-            landmark: l.landmark.map(xy),
-            point_b: l.point_b.map(xy),
-        })
-        .collect()
-}
-
-// The recorded true poses as the loop's evaluation; a recording knows no collisions.
-impl Evaluation for RecordedTruth {
-    fn true_pose(&self) -> Pose2 {
-        self.pose().unwrap_or_default()
-    }
-    fn collisions(&self) -> usize {
-        0
-    }
 }
 
 /// A recording replayed through the loop.

@@ -1,8 +1,9 @@
 //! Unit-level tests of the program's modules through their public items: outputs, figures,
-//! configuration files, batch tables and seeds, the fixed simulated laser, `expand`'s table.
+//! configuration files, batch tables and seeds, the fixed simulated laser.
 
 mod outputs {
     use robot_app::outputs::*;
+    use scan_log::{LegRecord, RunLog, trajectory_csv, tum, write_trajectory};
     use scan_types::{Pose2, WorldPoint};
     use std::f64::consts::FRAC_PI_2;
 
@@ -119,8 +120,8 @@ mod outputs {
 }
 
 mod plot {
-    use robot_app::outputs::{LegRecord, RunLog};
     use robot_app::plot::*;
+    use scan_log::{LegRecord, RunLog};
     use scan_types::{Pose2, WorldPoint};
 
     fn log() -> RunLog {
@@ -328,15 +329,6 @@ mod batch_table {
     use robot_app::outputs::Reason;
     use sim_laser::WorldKind;
 
-    #[test]
-    fn percentiles_by_hand() {
-        let mut v = vec![4.0, 1.0, 3.0, 2.0];
-        assert_eq!(median(&mut v), 2.5);
-        let mut v = vec![0.0, 10.0];
-        assert!((percentile(&mut v, 0.9) - 9.0).abs() < 1e-12);
-        assert!(median(&mut []).is_nan());
-    }
-
     fn row(group: &str, reached: bool, err: f64) -> BatchRow {
         BatchRow {
             group: group.into(),
@@ -434,30 +426,5 @@ mod simsetup {
                 .to_string()
                 .contains("lms200")
         );
-    }
-}
-
-mod expand {
-    use expansion::Expander;
-    use robot_app::cmd::expand::*;
-    use scan_types::{Scan, ScanGeometry};
-
-    #[test]
-    fn table_of_a_single_hit() {
-        // Rays at -90, 0, +90 deg; a hit 2 m ahead, r = 0.5: the centre ray clears 1.5 m.
-        let g = ScanGeometry::centred(3, std::f64::consts::PI, 0.0, 4.0).unwrap();
-        let s = Scan::from_ranges(&g, &[4.0, 2.0, f64::NAN], 0.0);
-        let mut c = vec![0.0; 3];
-        Expander::new(&g).clearances(&s, 0.5, &mut c);
-        let mut buf = Vec::new();
-        let n = write_table(&mut buf, &g, &s.ranges_m, &s.status, &c, 1.6).unwrap();
-        let text = String::from_utf8(buf).unwrap();
-        let lines: Vec<&str> = text.lines().collect();
-        assert_eq!(lines[0], "index,bearing_rad,range_m,clearance_m,blocked");
-        assert_eq!(lines[1], "0,-1.570796327,4.000000,4.000000,0");
-        assert_eq!(lines[2], "1,0.000000000,2.000000,1.500000,1");
-        // The invalid ray has no free length: blocked.
-        assert_eq!(lines[3], "2,1.570796327,NaN,0.000000,1");
-        assert_eq!(n, 2);
     }
 }

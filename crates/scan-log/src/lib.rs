@@ -14,6 +14,8 @@
 //!   or JSON of `robot-app scan` and `robot-app replay`.
 //! - [`RunSettings`], [`LegSummary`]: the metadata of a recorded simulated run, its settings
 //!   and the legs it drove, for a replay through the loop.
+//! - [`RunLog`], [`LegRecord`], [`write_trajectory`], [`trajectory_csv`], [`tum`]: the leg ends
+//!   of a run as `trajectory.csv` and TUM trajectories, with their errors against truth.
 //!
 //! ```
 //! use scan_log::{LogOptions, LogSource};
@@ -37,6 +39,7 @@ mod error;
 mod mcap_io;
 mod playback;
 mod record;
+mod run_log;
 mod run_meta;
 mod source;
 mod text;
@@ -53,8 +56,10 @@ pub use mcap_io::{
 };
 pub use playback::{GeometryOverride, LoopingLog, RecordedLaser, RecordedTruth, open_log};
 pub use record::LogRecord;
+pub use run_log::{LegRecord, RunLog, trajectory_csv, tum, write_trajectory};
 pub use run_meta::{
-    LEGS_METADATA, LegSummary, RUN_METADATA, RunSettings, legs_metadata, read_recorded_legs,
+    LEGS_METADATA, LegSummary, RUN_METADATA, RunSettings, leg_difference, legs_metadata,
+    read_recorded_legs,
 };
 pub use source::{LogFormat, LogOptions, LogReader, LogSource, open_text};
 pub use text::{TextFormat, TextLog};

@@ -158,6 +158,14 @@ impl RecordedTruth {
     }
 }
 
+// The recorded true poses as a simulator's truth (the origin before any); a recording knows
+// no collisions.
+impl scan_types::GroundTruth for RecordedTruth {
+    fn true_pose(&self) -> Pose2 {
+        self.pose().unwrap_or_default()
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

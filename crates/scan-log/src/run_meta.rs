@@ -152,6 +152,30 @@ impl std::fmt::Display for LegSummary {
     }
 }
 
+/// The first row where the `replayed` legs differ from the `recorded` ones, as
+/// `row I: recorded LEG; replayed LEG` (`nothing (N rows in all)` past a list's end), or
+/// `None` when they are the same.
+pub fn leg_difference(recorded: &[LegSummary], replayed: &[LegSummary]) -> Option<String> {
+    let i = recorded
+        .iter()
+        .zip(replayed)
+        .position(|(a, b)| a != b)
+        .or_else(|| {
+            (recorded.len() != replayed.len()).then(|| recorded.len().min(replayed.len()))
+        })?;
+    let row = |legs: &[LegSummary], what: &str| {
+        legs.get(i).map_or_else(
+            || format!("{what} nothing ({} rows in all)", legs.len()),
+            |l| format!("{what} {l}"),
+        )
+    };
+    Some(format!(
+        "row {i}: {}; {}",
+        row(recorded, "recorded"),
+        row(replayed, "replayed")
+    ))
+}
+
 impl crate::McapRecorder {
     /// Writes the legs of a finished run that ended for `reason` ([`LEGS_METADATA`]).
     pub fn write_legs(&mut self, legs: &[LegSummary], reason: &str) -> Result<(), LogError> {

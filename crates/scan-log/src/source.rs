@@ -281,6 +281,30 @@ impl LogSource {
     pub fn errors(&self) -> &[LogError] {
         &self.errors
     }
+
+    /// The rest of the log's scans that have a pose (the true one when `use_true`, else the
+    /// estimated one or failing that the true one), and the count of every scan read.
+    pub fn posed_scans(&mut self, use_true: bool) -> Result<(Vec<(Pose2, Scan)>, usize), LogError> {
+        let mut scans = Vec::new();
+        let mut total = 0usize;
+        loop {
+            let rec = match self.next_record() {
+                Ok(r) => r,
+                Err(e) if e.is_end_of_log() => break,
+                Err(e) => return Err(e),
+            };
+            total += 1;
+            let pose = if use_true {
+                rec.true_pose
+            } else {
+                rec.pose.or(rec.true_pose)
+            };
+            if let Some(p) = pose {
+                scans.push((p, rec.scan.clone()));
+            }
+        }
+        Ok((scans, total))
+    }
 }
 
 impl LaserSource for LogSource {

@@ -1,5 +1,6 @@
 //! The language every goalseek crate speaks: scan geometry, scans, poses, frames,
-//! and the two traits that let the real Hokuyo and the simulator be swapped.
+//! the two traits that let the real Hokuyo and the simulator be swapped, and the simulator's
+//! truth as a third ([`GroundTruth`]), for evaluation.
 //!
 //! Conventions (see `docs/architecture.md`): metres and radians, units in names,
 //! world frame x right / y up, angles counter-clockwise positive and normalised to
@@ -30,6 +31,7 @@ mod scan;
 mod source;
 #[cfg(feature = "testkit")]
 pub mod testkit;
+mod truth;
 
 pub use angle::{angle_diff_rad, normalize_angle_rad};
 pub use error::ScanTypesError;
@@ -41,6 +43,7 @@ pub use parse::{parse_point, parse_pose_deg, parse_size};
 pub use pose::{Pose2, RobotPoint, WorldPoint};
 pub use scan::{RayStatus, Scan};
 pub use source::LaserSource;
+pub use truth::GroundTruth;
 
 /// Re-export of the nalgebra version the types are built on.
 pub use nalgebra;

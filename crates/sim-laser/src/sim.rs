@@ -445,6 +445,15 @@ impl TruthHandle {
     }
 }
 
+impl scan_types::GroundTruth for TruthHandle {
+    fn true_pose(&self) -> Pose2 {
+        self.pose()
+    }
+    fn collisions(&self) -> usize {
+        TruthHandle::collisions(self)
+    }
+}
+
 fn gauss(rng: &mut ChaCha8Rng) -> f64 {
     let v: f64 = StandardNormal.sample(rng);
     v

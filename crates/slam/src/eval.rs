@@ -1,6 +1,7 @@
 //! Trajectory evaluation against reference poses, as the SLAM literature measures: relative
 //! pose errors over relations `k -> k + delta` and the absolute trajectory error after an
-//! SE(2) alignment (the figures `evo_rpe` and `evo_ape -a` print for the same TUM files).
+//! SE(2) alignment (the figures `evo_rpe` and `evo_ape -a` print for the same TUM files), and
+//! the [`median`] and interpolated [`percentile`] that batch tables report.
 
 use scan_types::{Pose2, angle_diff_rad};
 use serde::Serialize;
@@ -45,6 +46,26 @@ impl Stats {
             max: values.iter().copied().fold(0.0, f64::max),
             count: n,
         }
+    }
+}
+
+/// The median of `v` (sorted in place); NaN when empty.
+pub fn median(v: &mut [f64]) -> f64 {
+    percentile(v, 0.5)
+}
+
+/// The `q` quantile of `v` (sorted in place), interpolated between ranks; NaN when empty.
+pub fn percentile(v: &mut [f64], q: f64) -> f64 {
+    if v.is_empty() {
+        return f64::NAN;
+    }
+    v.sort_by(f64::total_cmp);
+    let pos = q * (v.len() - 1) as f64;
+    let (i, f) = (pos.floor() as usize, pos.fract());
+    if i + 1 < v.len() {
+        v[i] * (1.0 - f) + v[i + 1] * f
+    } else {
+        v[i]
     }
 }
 
@@ -156,6 +177,15 @@ pub fn heading_error_deg(a: &Pose2, b: &Pose2) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn percentiles_by_hand() {
+        let mut v = vec![4.0, 1.0, 3.0, 2.0];
+        assert_eq!(median(&mut v), 2.5);
+        let mut v = vec![0.0, 10.0];
+        assert!((percentile(&mut v, 0.9) - 9.0).abs() < 1e-12);
+        assert!(median(&mut []).is_nan());
+    }
 
     #[test]
     fn relative_error_of_a_hand_made_pair() {

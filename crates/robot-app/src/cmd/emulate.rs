@@ -39,13 +39,6 @@ pub struct EmulateArgs {
     pub source: Option<PathBuf>,
 }
 
-fn model_name(m: Model) -> &'static str {
-    match m {
-        Model::Urg04lx => "urg-04lx",
-        Model::Utm30lx => "utm-30lx",
-    }
-}
-
 /// Starts the emulator described by `args` (the caller keeps it alive).
 pub fn start(args: &EmulateArgs) -> anyhow::Result<PtyServer> {
     let mut profile = Profile::of(args.model);
@@ -62,7 +55,7 @@ pub fn start(args: &EmulateArgs) -> anyhow::Result<PtyServer> {
         let source = crate::simsetup::sim_scan_source(
             args.world.as_deref(),
             pose,
-            model_name(args.model),
+            args.model.name(),
             args.seed,
             args.noise.is_on(),
         )?;
@@ -93,7 +86,7 @@ pub fn run(args: EmulateArgs) -> anyhow::Result<()> {
     }
     tracing::info!(
         "emulated {} on {} ({}); stop with Ctrl-C{}",
-        model_name(args.model),
+        args.model.name(),
         server.path(),
         served(&args),
         if args.no_stdin {

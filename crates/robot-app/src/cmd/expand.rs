@@ -1,14 +1,13 @@
 //! `robot-app expand`: expands the obstacles of a scan CSV (the form `robot-app scan` writes)
 //! by the robot radius and prints each ray's clearance and whether it is blocked.
 
-use std::io::{BufReader, Write};
+use std::io::BufReader;
 use std::path::PathBuf;
 
 use anyhow::{Context, bail};
 use clap::Args;
-use expansion::{Expander, is_blocked};
+use expansion::{Expander, write_clearance_csv};
 use scan_log::read_scan_csv;
-use scan_types::{RayStatus, ScanGeometry};
 
 /// Arguments of `robot-app expand`.
 #[derive(Debug, Args)]
@@ -48,7 +47,7 @@ pub fn run(args: ExpandArgs) -> anyhow::Result<()> {
     };
     let mut clearance = vec![0.0; geometry.ray_count];
     Expander::new(&geometry).clearances(&scan, args.radius, &mut clearance);
-    let blocked = write_table(
+    let blocked = write_clearance_csv(
         std::io::stdout().lock(),
         &geometry,
         &scan.ranges_m,
@@ -65,34 +64,4 @@ pub fn run(args: ExpandArgs) -> anyhow::Result<()> {
         "expanded"
     );
     Ok(())
-}
-
-/// Writes the per-ray table; returns how many rays are blocked.
-pub fn write_table<W: Write>(
-    mut w: W,
-    geometry: &ScanGeometry,
-    ranges_m: &[f64],
-    status: &[RayStatus],
-    clearance_m: &[f64],
-    travel_m: f64,
-) -> std::io::Result<usize> {
-    writeln!(w, "index,bearing_rad,range_m,clearance_m,blocked")?;
-    let mut blocked_count = 0;
-    for (i, &c) in clearance_m.iter().enumerate() {
-        let range = match status.get(i) {
-            Some(RayStatus::Error(_)) | None => f64::NAN,
-            _ => ranges_m[i],
-        };
-        let blocked = is_blocked(c, travel_m);
-        blocked_count += usize::from(blocked);
-        writeln!(
-            w,
-            "{i},{:.9},{:.6},{:.6},{}",
-            geometry.bearing_rad(i),
-            range,
-            c,
-            u8::from(blocked)
-        )?;
-    }
-    Ok(blocked_count)
 }

@@ -8,7 +8,7 @@ use std::path::PathBuf;
 use anyhow::Context;
 use clap::Args;
 use localiser::build_map;
-use scan_types::{LaserSource, Pose2, Scan, ScanGeometry};
+use scan_types::{LaserSource, ScanGeometry};
 
 /// Arguments of `robot-app map`.
 #[derive(Debug, Args)]
@@ -53,7 +53,9 @@ pub fn run(args: MapArgs) -> anyhow::Result<()> {
         )
         .with_context(|| format!("--spread-deg {deg}"))?;
     }
-    let (scans, total) = posed_scans(&mut source, args.pose == "true")?;
+    let (scans, total) = source
+        .posed_scans(args.pose == "true")
+        .context("reading the log")?;
     if scans.is_empty() {
         anyhow::bail!(
             "{}: none of its {total} scans has a pose; 'robot-app map' needs a log with poses (e.g. a CARMEN corrected log)",
@@ -91,31 +93,4 @@ pub fn run(args: MapArgs) -> anyhow::Result<()> {
         tracing::warn!("{} malformed records skipped", source.skipped());
     }
     Ok(())
-}
-
-/// The scans of the log that have a pose (the true one when `use_true`, else the estimated one
-/// or failing that the true one), and the count of every scan read.
-fn posed_scans(
-    source: &mut scan_log::LogSource,
-    use_true: bool,
-) -> anyhow::Result<(Vec<(Pose2, Scan)>, usize)> {
-    let mut scans = Vec::new();
-    let mut total = 0usize;
-    loop {
-        let rec = match source.next_record() {
-            Ok(r) => r,
-            Err(e) if e.is_end_of_log() => break,
-            Err(e) => return Err(e).context("reading the log"),
-        };
-        total += 1;
-        let pose = if use_true {
-            rec.true_pose
-        } else {
-            rec.pose.or(rec.true_pose)
-        };
-        if let Some(p) = pose {
-            scans.push((p, rec.scan.clone()));
-        }
-    }
-    Ok((scans, total))
 }

@@ -102,7 +102,7 @@ pub fn run_to<W: Write>(args: &ReplayArgs, out: &mut W) -> anyhow::Result<()> {
 /// differ from the recorded ones or if the replayed run does not reach the target (as `sim`
 /// fails then; a cut recording ends in `sensor_failure`).
 fn run_loop<W: Write>(args: &ReplayArgs, out: &mut W) -> anyhow::Result<()> {
-    use crate::record::{leg_summaries, read_settings, replay_loop};
+    use crate::record::{read_settings, replay_loop};
     let settings = read_settings(&args.file)?;
     let replay = replay_loop(&args.file, &settings.config, settings.start, settings.goal)?;
     let o = &replay.run.outcome;
@@ -119,7 +119,7 @@ fn run_loop<W: Write>(args: &ReplayArgs, out: &mut W) -> anyhow::Result<()> {
     )?;
     if let Some(dir) = &args.out {
         std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
-        crate::outputs::write_trajectory(dir, log)?;
+        scan_log::write_trajectory(dir, log)?;
         o.grid
             .write_map_server(dir, "map")
             .with_context(|| format!("writing map.pgm/map.yaml in {}", dir.display()))?;
@@ -127,7 +127,7 @@ fn run_loop<W: Write>(args: &ReplayArgs, out: &mut W) -> anyhow::Result<()> {
             .to_png(&dir.join("map.png"))
             .with_context(|| format!("writing map.png in {}", dir.display()))?;
     }
-    let compared = compare_legs(&args.file, &leg_summaries(log), o.legs_driven, out);
+    let compared = compare_legs(&args.file, &log.leg_summaries(), o.legs_driven, out);
     out.flush()?;
     compared?;
     if o.reason != crate::outputs::Reason::Reached {
@@ -152,12 +152,7 @@ fn compare_legs<W: Write>(
         writeln!(out, "the recording holds no legs to compare with")?;
         return Ok(());
     };
-    let first_diff = recorded
-        .iter()
-        .zip(replayed)
-        .position(|(a, b)| a != b)
-        .or_else(|| (recorded.len() != replayed.len()).then(|| recorded.len().min(replayed.len())));
-    let Some(i) = first_diff else {
+    let Some(difference) = scan_log::leg_difference(&recorded, replayed) else {
         writeln!(
             out,
             "same legs as recorded: {} rows (start + {legs_driven} legs), every estimate, landmark and point B bit for bit; recorded end: {reason}",
@@ -165,15 +160,5 @@ fn compare_legs<W: Write>(
         )?;
         return Ok(());
     };
-    let row = |legs: &[scan_log::LegSummary], what: &str| {
-        legs.get(i).map_or_else(
-            || format!("{what} nothing ({} rows in all)", legs.len()),
-            |l| format!("{what} {l}"),
-        )
-    };
-    anyhow::bail!(
-        "the replayed legs differ from the recorded ones at row {i}: {}; {}",
-        row(&recorded, "recorded"),
-        row(replayed, "replayed")
-    )
+    anyhow::bail!("the replayed legs differ from the recorded ones at {difference}")
 }

@@ -8,8 +8,9 @@ use scan_types::{Pose2, WorldPoint};
 use sim_laser::{SensorPreset, SimSetup, paper_start, paper_target};
 
 use crate::config::Params;
-use crate::outputs::{Reason, Summary, write_summary, write_trajectory};
+use crate::outputs::{Reason, Summary, write_summary};
 use crate::runloop::run_loop;
+use scan_log::write_trajectory;
 
 /// A simulated run counts as a success when the true position ends this close to the target.
 pub const SUCCESS_RADIUS_M: f64 = 0.3;
@@ -78,7 +79,7 @@ pub struct SimRun {
     /// The navigator's outcome.
     pub outcome: navigator::Outcome,
     /// Leg ends with the true pose beside the estimate.
-    pub log: crate::outputs::RunLog,
+    pub log: scan_log::RunLog,
 }
 
 /// CPU time of the calling thread, seconds.

@@ -14,7 +14,8 @@ use scan_types::LaserSource;
 
 use slam::{FrontEndParams, LogRun, SlamRun};
 
-use crate::outputs::{tum, write_atomic};
+use crate::outputs::write_atomic;
+use scan_log::tum;
 
 /// Arguments of `robot-app slam`.
 #[derive(Debug, Args)]

@@ -13,6 +13,16 @@ pub enum Model {
     Utm30lx,
 }
 
+impl Model {
+    /// The model's name as [`Model::from_str`] reads it: `urg-04lx` or `utm-30lx`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Model::Urg04lx => "urg-04lx",
+            Model::Utm30lx => "utm-30lx",
+        }
+    }
+}
+
 impl FromStr for Model {
     type Err = String;
     fn from_str(s: &str) -> Result<Self, String> {

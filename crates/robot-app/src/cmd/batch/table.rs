@@ -4,6 +4,7 @@ use serde::Serialize;
 use sim_laser::WorldKind;
 
 use crate::outputs::Reason;
+use slam::eval::{median, percentile};
 
 /// One row of batch.json.
 #[derive(Debug, Clone, Serialize)]
@@ -80,26 +81,6 @@ pub struct Aggregate {
     /// Count of runs per end reason (`false_arrival`: the estimate reached the target, the
     /// robot did not).
     pub reasons: std::collections::BTreeMap<String, usize>,
-}
-
-/// The median of `v` (sorted in place); NaN when empty.
-pub fn median(v: &mut [f64]) -> f64 {
-    percentile(v, 0.5)
-}
-
-/// The `q` quantile of `v` (sorted in place), interpolated between ranks; NaN when empty.
-pub fn percentile(v: &mut [f64], q: f64) -> f64 {
-    if v.is_empty() {
-        return f64::NAN;
-    }
-    v.sort_by(f64::total_cmp);
-    let pos = q * (v.len() - 1) as f64;
-    let (i, f) = (pos.floor() as usize, pos.fract());
-    if i + 1 < v.len() {
-        v[i] * (1.0 - f) + v[i + 1] * f
-    } else {
-        v[i]
-    }
 }
 
 /// Aggregates rows per group and method, in first-seen order.
