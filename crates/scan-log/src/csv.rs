@@ -140,6 +140,41 @@ pub fn read_scan_csv<R: BufRead>(r: R, file: &str) -> Result<(ScanGeometry, Scan
 /// Largest departure of a bearing from an even spacing, as a share of the increment.
 const SPACING_TOLERANCE: f64 = 0.01;
 
+/// One row `index,bearing_rad,range_m[,valid]` of a plain scan CSV: bearing, range, valid.
+fn plain_row(
+    line: &str,
+    expected_index: usize,
+    file: &str,
+    lineno: usize,
+) -> Result<(f64, f64, bool), LogError> {
+    let err = |message: String| csv_error(file, lineno, message, None);
+    let cols: Vec<&str> = line.split(',').map(str::trim).collect();
+    if !(3..=4).contains(&cols.len()) {
+        return Err(err(format!(
+            "expected index,bearing_rad,range_m[,valid], found {} columns",
+            cols.len()
+        )));
+    }
+    if cols[0].parse::<usize>().ok() != Some(expected_index) {
+        return Err(err(format!(
+            "expected ray index {}, found {:?}",
+            expected_index, cols[0]
+        )));
+    }
+    let bearing = cols[1]
+        .parse::<f64>()
+        .ok()
+        .filter(|b| b.is_finite())
+        .ok_or_else(|| err(format!("bearing_rad {:?} is not a number", cols[1])))?;
+    let range = cols[2].parse::<f64>().unwrap_or(f64::NAN);
+    let valid = match cols.get(3) {
+        None | Some(&"1") => range.is_finite() && range >= 0.0,
+        Some(&"0") => false,
+        Some(other) => return Err(err(format!("valid must be 0 or 1, found {other:?}"))),
+    };
+    Ok((bearing, range, valid))
+}
+
 /// A scan CSV without goalseek's geometry line (a user's own scan): rows
 /// `index,bearing_rad,range_m[,valid]` after an optional header; the geometry comes from the
 /// bearings, which must be evenly spaced. The range limits are 0 and the longest range; a
@@ -157,32 +192,7 @@ fn read_plain_csv(
         if line.is_empty() || line.starts_with('#') || line.starts_with("index") {
             continue;
         }
-        let err = |message: String| csv_error(file, lineno, message, None);
-        let cols: Vec<&str> = line.split(',').map(str::trim).collect();
-        if !(3..=4).contains(&cols.len()) {
-            return Err(err(format!(
-                "expected index,bearing_rad,range_m[,valid], found {} columns",
-                cols.len()
-            )));
-        }
-        if cols[0].parse::<usize>().ok() != Some(rows.len()) {
-            return Err(err(format!(
-                "expected ray index {}, found {:?}",
-                rows.len(),
-                cols[0]
-            )));
-        }
-        let bearing = cols[1]
-            .parse::<f64>()
-            .ok()
-            .filter(|b| b.is_finite())
-            .ok_or_else(|| err(format!("bearing_rad {:?} is not a number", cols[1])))?;
-        let range = cols[2].parse::<f64>().unwrap_or(f64::NAN);
-        let valid = match cols.get(3) {
-            None | Some(&"1") => range.is_finite() && range >= 0.0,
-            Some(&"0") => false,
-            Some(other) => return Err(err(format!("valid must be 0 or 1, found {other:?}"))),
-        };
+        let (bearing, range, valid) = plain_row(line, rows.len(), file, lineno)?;
         rows.push((bearing, range, valid, lineno));
     }
     if rows.len() < 2 {

@@ -117,24 +117,24 @@ impl SimSetup {
     /// Checks that the robot can start at `start` and that `target` lies in the world's free
     /// space, before the robot moves.
     pub fn check_scenario(&self, target: WorldPoint) -> Result<(), SimError> {
-        let (lo, hi) = self.world.bounds();
-        let bad = |what, message: String| {
-            Err(SimError::Scenario {
-                world: self.world_name.clone(),
-                what,
-                message,
-            })
-        };
-        let inside = |p: WorldPoint| {
-            p.x_m() >= lo.x_m() && p.x_m() <= hi.x_m() && p.y_m() >= lo.y_m() && p.y_m() <= hi.y_m()
-        };
-        let bounds = format!(
-            "x {:.2}..{:.2} m, y {:.2}..{:.2} m",
-            lo.x_m(),
-            hi.x_m(),
-            lo.y_m(),
-            hi.y_m()
-        );
+        let s = self.start;
+        if !s.theta_rad.is_finite() {
+            return Err(
+                self.scenario_error("start", format!("heading {} is not finite", s.theta_rad))
+            );
+        }
+        self.check_point("start", s.position(), Some(self.robot_radius_m))?;
+        self.check_point("target", target, None)
+    }
+
+    /// `p` is finite, inside the world's bounds and clear of obstacles (a disc of `radius`
+    /// around it, or the point itself).
+    fn check_point(
+        &self,
+        what: &'static str,
+        p: WorldPoint,
+        radius: Option<f64>,
+    ) -> Result<(), SimError> {
         // Far coordinates in exponent form, so that a typo stays readable.
         let m = |v: f64| {
             if v.abs() < 1e6 {
@@ -143,59 +143,47 @@ impl SimSetup {
                 format!("{v:.3e}")
             }
         };
-        let s = self.start;
-        if !(s.x_m.is_finite() && s.y_m.is_finite() && s.theta_rad.is_finite()) {
-            return bad(
-                "start",
-                format!("({}, {}, {}) is not finite", s.x_m, s.y_m, s.theta_rad),
-            );
+        let (x, y) = (p.x_m(), p.y_m());
+        if !(x.is_finite() && y.is_finite()) {
+            return Err(self.scenario_error(what, format!("({x}, {y}) is not finite")));
         }
-        if !inside(s.position()) {
-            return bad(
-                "start",
-                format!(
-                    "({}, {}) lies outside the world ({bounds})",
-                    m(s.x_m),
-                    m(s.y_m)
+        let (lo, hi) = self.world.bounds();
+        if !(x >= lo.x_m() && x <= hi.x_m() && y >= lo.y_m() && y <= hi.y_m()) {
+            let message = format!(
+                "({}, {}) lies outside the world (x {:.2}..{:.2} m, y {:.2}..{:.2} m)",
+                m(x),
+                m(y),
+                lo.x_m(),
+                hi.x_m(),
+                lo.y_m(),
+                hi.y_m()
+            );
+            return Err(self.scenario_error(what, message));
+        }
+        let blocked = match radius {
+            Some(r) => self.world.disc_collides(p, r),
+            None => self.world.is_occupied(p),
+        };
+        if blocked {
+            let message = match radius {
+                Some(r) => format!(
+                    "({}, {}) puts the robot (radius {r} m) into an obstacle",
+                    m(x),
+                    m(y)
                 ),
-            );
-        }
-        if self.world.disc_collides(s.position(), self.robot_radius_m) {
-            return bad(
-                "start",
-                format!(
-                    "({:.2}, {:.2}) puts the robot (radius {} m) into an obstacle",
-                    s.x_m, s.y_m, self.robot_radius_m
-                ),
-            );
-        }
-        if !(target.x_m().is_finite() && target.y_m().is_finite()) {
-            return bad(
-                "target",
-                format!("({}, {}) is not finite", target.x_m(), target.y_m()),
-            );
-        }
-        if !inside(target) {
-            return bad(
-                "target",
-                format!(
-                    "({}, {}) lies outside the world ({bounds})",
-                    m(target.x_m()),
-                    m(target.y_m())
-                ),
-            );
-        }
-        if self.world.is_occupied(target) {
-            return bad(
-                "target",
-                format!(
-                    "({:.2}, {:.2}) lies inside an obstacle",
-                    target.x_m(),
-                    target.y_m()
-                ),
-            );
+                None => format!("({}, {}) lies inside an obstacle", m(x), m(y)),
+            };
+            return Err(self.scenario_error(what, message));
         }
         Ok(())
+    }
+
+    fn scenario_error(&self, what: &'static str, message: String) -> SimError {
+        SimError::Scenario {
+            world: self.world_name.clone(),
+            what,
+            message,
+        }
     }
 
     /// Builds the simulation (the world is shared, not copied).
