@@ -2,29 +2,20 @@
 //! robot is. A stalled base must never look like an arrival, and slip or short turns must not
 //! make the robot claim a target it is far from.
 
-use std::sync::Arc;
-
 use navigator::{Navigator, NoMonitor, Outcome, Params, Reason};
 use scan_types::Pose2;
-use sim_laser::{
-    BaseGains, MotionNoise, SensorPreset, Simulation, TruthHandle, World, paper_start, paper_target,
-};
+use sim_laser::{BaseGains, SensorPreset, SimSetup, TruthHandle, paper_start, paper_target};
 
 fn run_with(gains: BaseGains, seed: u64) -> (Outcome, TruthHandle) {
     let params = Params::goalseek();
-    let preset = SensorPreset::Paper;
-    let sim = Simulation::new(
-        Arc::new(World::paper()),
-        preset,
-        preset.default_noise(),
-        MotionNoise::default(),
-        params.robot.radius_m,
-        paper_start(),
-        seed,
-    )
-    .with_base_gains(gains);
+    // The paper's scenario: its world, laser and noise, a 0.3 m robot (goalseek's radius).
+    let sim = SimSetup::paper(seed)
+        .build()
+        .expect("the paper's setup builds")
+        .with_base_gains(gains);
     let (mut laser, mut base, truth) = sim.split();
-    let nav = Navigator::new(params, preset.geometry(), paper_start(), paper_target()).unwrap();
+    let geometry = SensorPreset::Paper.geometry();
+    let nav = Navigator::new(params, geometry, paper_start(), paper_target()).unwrap();
     let outcome = navigator::run(nav, &mut laser, &mut base, &mut NoMonitor);
     (outcome, truth)
 }

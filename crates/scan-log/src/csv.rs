@@ -108,15 +108,9 @@ pub fn read_scan_csv<R: BufRead>(r: R, file: &str) -> Result<(ScanGeometry, Scan
 
     let mut ranges = Vec::with_capacity(count);
     let mut status = Vec::with_capacity(count);
-    for (n, line) in lines {
-        let lineno = n + 1;
-        let line =
-            line.map_err(|e| csv_error(file, lineno, "unreadable".into(), Some(e.into())))?;
-        let line = line.trim();
-        if line.is_empty() || line.starts_with('#') || line.starts_with("index") {
-            continue;
-        }
-        let (range, st) = parse_row(line, ranges.len(), geometry.max_range_m, file, lineno)?;
+    for row in data_rows(lines, file) {
+        let (lineno, line) = row?;
+        let (range, st) = parse_row(&line, ranges.len(), geometry.max_range_m, file, lineno)?;
         ranges.push(range);
         status.push(st);
     }
@@ -135,6 +129,30 @@ pub fn read_scan_csv<R: BufRead>(r: R, file: &str) -> Result<(ScanGeometry, Scan
         host_time_s: 0.0,
     };
     Ok((geometry, scan))
+}
+
+/// The data rows of a scan CSV as (1-based line number, trimmed text): blank, comment and
+/// header lines skipped.
+fn data_rows<'a>(
+    lines: impl Iterator<Item = (usize, std::io::Result<String>)> + 'a,
+    file: &'a str,
+) -> impl Iterator<Item = Result<(usize, String), LogError>> + 'a {
+    lines.filter_map(move |(n, line)| {
+        let lineno = n + 1;
+        match line {
+            Err(e) => Some(Err(csv_error(
+                file,
+                lineno,
+                "unreadable".into(),
+                Some(e.into()),
+            ))),
+            Ok(l) => {
+                let t = l.trim();
+                let skip = t.is_empty() || t.starts_with('#') || t.starts_with("index");
+                (!skip).then(|| Ok((lineno, t.to_string())))
+            }
+        }
+    })
 }
 
 /// Largest departure of a bearing from an even spacing, as a share of the increment.
@@ -184,15 +202,9 @@ fn read_plain_csv(
     file: &str,
 ) -> Result<(ScanGeometry, Scan), LogError> {
     let mut rows: Vec<(f64, f64, bool, usize)> = Vec::new();
-    for (n, line) in lines {
-        let lineno = n + 1;
-        let line =
-            line.map_err(|e| csv_error(file, lineno, "unreadable".into(), Some(e.into())))?;
-        let line = line.trim();
-        if line.is_empty() || line.starts_with('#') || line.starts_with("index") {
-            continue;
-        }
-        let (bearing, range, valid) = plain_row(line, rows.len(), file, lineno)?;
+    for row in data_rows(lines, file) {
+        let (lineno, line) = row?;
+        let (bearing, range, valid) = plain_row(&line, rows.len(), file, lineno)?;
         rows.push((bearing, range, valid, lineno));
     }
     if rows.len() < 2 {
