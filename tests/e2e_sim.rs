@@ -116,9 +116,17 @@ fn paper_scenario_reaches_the_target_and_writes_every_output() {
         assert_eq!((r[0], r[1], r[2]), (0.0, START.0, START.1));
         assert!((r[3] - 22.5f64.to_radians().sin()).abs() < 1e-9);
         assert!((r[4] - 22.5f64.to_radians().cos()).abs() < 1e-9);
-        // Time stamps are the leg numbers.
-        assert!(rows.iter().enumerate().all(|(i, r)| r[0] == i as f64));
     }
+    // Time stamps are the simulated clock of each leg's last scan: the first scan at 0 s, then
+    // increasing; the drives alone take their length over the simulator's 0.3 m/s.
+    assert!(truth.iter().zip(&est).all(|(t, e)| t[0] == e[0]));
+    assert!(est.windows(2).all(|w| w[1][0] > w[0][0]), "{est:?}");
+    let drive_s = s["path_length_m"].as_f64().unwrap() / 0.3;
+    assert!(
+        est[legs][0] >= 0.95 * drive_s,
+        "{} s < {drive_s} s",
+        est[legs][0]
+    );
 
     // Localisation errors recomputed from the two TUM files (6-decimal rounding).
     let errs: Vec<f64> = est

@@ -347,6 +347,7 @@ impl Navigator {
             .collect();
         self.legs_log.push(Leg {
             leg: self.legs,
+            time_s: scan.host_time_s,
             estimate: self.estimate,
             landmark,
             point_b,

@@ -50,6 +50,9 @@ impl std::fmt::Display for Reason {
 pub struct Leg {
     /// Leg number (0 = start).
     pub leg: usize,
+    /// Time of the scan that ended the leg (the first scan for leg 0), seconds: the scan's
+    /// `host_time_s` (the simulated clock in the simulator, the log's clock in a replay).
+    pub time_s: f64,
     /// The robot's estimate.
     pub estimate: Pose2,
     /// The landmark the leg localised on, world frame by the estimate.

@@ -273,6 +273,7 @@ mod tests {
     fn bounds_are_square_and_hold_everything() {
         let leg = LegRecord {
             leg: 0,
+            time_s: 0.0,
             estimate: Pose2::new(0.0, 0.0, 0.5),
             truth: Some(Pose2::new(3.55, 3.0, 0.5)),
             landmark: None,

@@ -51,6 +51,7 @@ where
         )
         .map(|(l, truth)| LegRecord {
             leg: l.leg,
+            time_s: l.time_s,
             estimate: l.estimate,
             truth,
             landmark: l.landmark,

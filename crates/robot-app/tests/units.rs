@@ -10,6 +10,7 @@ mod outputs {
     fn row(leg: usize, est: (f64, f64), truth: (f64, f64)) -> LegRecord {
         LegRecord {
             leg,
+            time_s: leg as f64,
             estimate: Pose2::new(est.0, est.1, 0.0),
             truth: Some(Pose2::new(truth.0, truth.1, 0.1)),
             landmark: Some(WorldPoint::new(1.0, 2.0)),
@@ -130,6 +131,7 @@ mod plot {
             let f = i as f64;
             legs.push(LegRecord {
                 leg: i,
+                time_s: i as f64,
                 estimate: Pose2::new(f, f, 0.5),
                 truth: Some(Pose2::new(f + 0.05, f, 0.5)),
                 landmark: Some(WorldPoint::new(f + 0.5, f - 0.5)),
@@ -216,6 +218,7 @@ mod plot {
             .enumerate()
             .map(|(k, &(x, y))| LegRecord {
                 leg: k,
+                time_s: k as f64,
                 estimate: Pose2::new(x, y + 1.0, 0.0),
                 truth: Some(Pose2::new(x, y, 0.0)),
                 landmark: None,

@@ -14,6 +14,8 @@ use crate::{LegSummary, LogError};
 pub struct LegRecord {
     /// Leg number (0 = start).
     pub leg: usize,
+    /// Time of the scan that ended the leg, seconds (the TUM files' time stamps).
+    pub time_s: f64,
     /// The robot's estimate.
     pub estimate: Pose2,
     /// The true pose (simulator only).
@@ -135,7 +137,7 @@ pub fn write_trajectory(dir: &Path, log: &RunLog) -> Result<(), LogError> {
     write_atomic(&dir.join("trajectory.csv"), trajectory_csv(log).as_bytes())?;
     write_atomic(
         &dir.join("estimate.tum"),
-        tum(log.legs.iter().map(|r| (r.leg as f64, r.estimate))).as_bytes(),
+        tum(log.legs.iter().map(|r| (r.time_s, r.estimate))).as_bytes(),
     )?;
     if log.legs.iter().any(|r| r.truth.is_some()) {
         write_atomic(
@@ -143,7 +145,7 @@ pub fn write_trajectory(dir: &Path, log: &RunLog) -> Result<(), LogError> {
             tum(log
                 .legs
                 .iter()
-                .filter_map(|r| r.truth.map(|t| (r.leg as f64, t))))
+                .filter_map(|r| r.truth.map(|t| (r.time_s, t))))
             .as_bytes(),
         )?;
     }
