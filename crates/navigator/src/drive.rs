@@ -203,13 +203,13 @@ fn matched(
         ..*params
     };
     let mut best = target.align(&nav.geometry, scan, guess, &prior);
-    let hits = scan.robot_hits(&nav.geometry).count();
     // The laser disagrees with the commands when the match, pulled toward them by the prior,
     // still lands several prior sigmas away (or fails).
     let disagrees = best
         .as_ref()
         .is_none_or(|m| (m.pose.x_m - ahead_m).abs() > DISAGREE_SIGMAS * prior.prior_sigma_m);
     if ahead_m.abs() >= PARTIAL_MIN_M && disagrees {
+        let hits = scan.robot_hits(&nav.geometry).count();
         // The commands do not explain the scan: try partial travel, a hypothesis of the
         // laser's, without pull toward the commands.
         let loose = MatchParams {
@@ -237,7 +237,6 @@ fn matched(
                 data_sig = m.data_worst_sigma_m,
                 rms = m.rms_m,
                 pairs = m.pairs,
-                hits,
                 "scan match"
             );
             (

@@ -29,11 +29,6 @@ pub fn requested() -> bool {
     REQUESTED.load(Ordering::SeqCst)
 }
 
-/// Asks for a stop as a signal would (tests, and a sensor source that gives up).
-pub fn request() {
-    REQUESTED.store(true, Ordering::SeqCst);
-}
-
 /// The error a command returns when it stopped because of a signal, after writing its
 /// outputs; `main` turns it into [`EXIT_CODE`].
 #[derive(Debug)]
@@ -46,17 +41,3 @@ impl std::fmt::Display for Interrupted {
 }
 
 impl std::error::Error for Interrupted {}
-
-/// One line for an error: its causes joined with ': ', each said once (an I/O error wrapped
-/// by a crate's error often repeats its cause's text).
-pub fn one_line(e: &anyhow::Error) -> String {
-    let mut parts: Vec<String> = Vec::new();
-    for cause in e.chain() {
-        let text = cause.to_string();
-        if parts.last().is_some_and(|p| p.ends_with(&text)) {
-            continue;
-        }
-        parts.push(text);
-    }
-    parts.join(": ")
-}

@@ -74,7 +74,7 @@ fn main() -> ExitCode {
         Err(e) => {
             #[allow(clippy::print_stderr)]
             {
-                eprintln!("robot-app: {}", robot_app::interrupt::one_line(&e));
+                eprintln!("robot-app: {}", one_line(&e));
             }
             ExitCode::FAILURE
         }
@@ -87,4 +87,18 @@ fn is_broken_pipe(e: &anyhow::Error) -> bool {
     e.chain().count() == 1
         && e.downcast_ref::<std::io::Error>()
             .is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe)
+}
+
+/// One line for an error: its causes joined with ': ', each said once (an I/O error wrapped
+/// by a crate's error often repeats its cause's text).
+fn one_line(e: &anyhow::Error) -> String {
+    let mut parts: Vec<String> = Vec::new();
+    for cause in e.chain() {
+        let text = cause.to_string();
+        if parts.last().is_some_and(|p| p.ends_with(&text)) {
+            continue;
+        }
+        parts.push(text);
+    }
+    parts.join(": ")
 }

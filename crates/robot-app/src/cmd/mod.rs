@@ -63,19 +63,6 @@ impl LoopOptions {
     }
 }
 
-/// A command that prints is done, not failed, when its reader goes away (`... | head`).
-pub fn reader_gone_is_ok(result: anyhow::Result<()>) -> anyhow::Result<()> {
-    match result {
-        Err(e)
-            if e.downcast_ref::<std::io::Error>()
-                .is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe) =>
-        {
-            Ok(())
-        }
-        other => other,
-    }
-}
-
 /// Reconnection of a Hokuyo that disappears mid-run: 0.1 s doubling to 2 s, for about 30 s.
 pub const RECONNECT: urg_driver::Backoff = urg_driver::Backoff {
     initial: std::time::Duration::from_millis(100),

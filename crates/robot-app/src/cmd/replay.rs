@@ -45,7 +45,7 @@ pub struct ReplayArgs {
 /// Runs `robot-app replay`, printing to stdout.
 pub fn run(args: ReplayArgs) -> anyhow::Result<()> {
     let stdout = std::io::stdout();
-    super::reader_gone_is_ok(run_to(&args, &mut std::io::BufWriter::new(stdout.lock())))
+    run_to(&args, &mut std::io::BufWriter::new(stdout.lock()))
 }
 
 /// Runs `robot-app replay`, writing to `out`.

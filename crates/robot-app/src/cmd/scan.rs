@@ -60,7 +60,7 @@ pub struct ScanArgs {
 /// Runs `robot-app scan`, printing to stdout.
 pub fn run(args: ScanArgs) -> anyhow::Result<()> {
     let stdout = std::io::stdout();
-    super::reader_gone_is_ok(run_to(&args, &mut stdout.lock()))
+    run_to(&args, &mut stdout.lock())
 }
 
 /// Runs `robot-app scan`, writing to `out`. A Hokuyo that is unplugged is waited for
