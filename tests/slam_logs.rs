@@ -86,6 +86,11 @@ fn aces_and_breezyslam_every_scan_placed() {
         );
         // BreezySLAM logs carry no poses: nothing to evaluate against.
         assert_eq!(r.evaluation.is_some(), rel.starts_with("carmen"), "{rel}");
+        if let Some(e) = &r.evaluation {
+            // The rotation bar, k -> k+1 at most 1.0 deg mean: ACES turns by up to
+            // 78 deg between scans and reverses a 78 deg turn by 96 deg (its reference poses).
+            assert!(e.relative_1.rotation_deg.mean <= 1.0, "{rel}: {e:?}");
+        }
         for f in [
             "trajectory.tum",
             "map.pgm",

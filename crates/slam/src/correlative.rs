@@ -49,11 +49,16 @@ struct Rotated {
 
 impl Rotated {
     fn new(grid: &ScoreGrid, points: &[[f64; 2]], guess: &Pose2, window: &Window) -> Self {
-        // The angular step moves the farthest point by about one cell.
-        let reach = points
-            .iter()
-            .map(|p| p[0].hypot(p[1]))
-            .fold(grid.resolution_m, f64::max);
+        // The angular step moves most points (nine in ten) by at most about one cell; ICP
+        // refines the angle afterwards.
+        let mut ranges: Vec<f64> = points.iter().map(|p| p[0].hypot(p[1])).collect();
+        let k = (ranges.len() * 9 / 10).min(ranges.len().saturating_sub(1));
+        let reach = if ranges.is_empty() {
+            grid.resolution_m
+        } else {
+            *ranges.select_nth_unstable_by(k, f64::total_cmp).1
+        }
+        .max(grid.resolution_m);
         let step = (grid.resolution_m / reach).min(window.angular_rad.max(1e-9));
         let n = (window.angular_rad / step).ceil() as i64;
         let mut cells = Vec::with_capacity((2 * n as usize + 1) * points.len());

@@ -23,6 +23,17 @@ pub struct FrontEndParams {
     pub linear_window_m: f64,
     /// Half-width of the rotation search around the prediction, degrees.
     pub angular_window_deg: f64,
+    /// Share of the last step's turn that the wide search's prediction repeats (subsampled
+    /// logs turn in bursts: half the last turn is the safer centre for the window).
+    pub rotation_prediction: f64,
+    /// The pose ICP finds from the constant-velocity prediction is kept, without the wide
+    /// search, when its field score reaches this (1, the default: never; the wide search
+    /// places every scan) ...
+    pub local_quality: f64,
+    /// ... and it lies within this of the prediction, metres ...
+    pub local_shift_m: f64,
+    /// ... and turned at most this from it, degrees.
+    pub local_turn_deg: f64,
     /// Quality lost per square metre of the pose away from the prediction (keeps a corridor's
     /// scan where the motion puts it).
     pub translation_cost: f64,
@@ -55,6 +66,8 @@ pub struct FrontEndParams {
     /// Neighbouring hits within this of each other lie on one surface for the refinement,
     /// metres.
     pub icp_surface_m: f64,
+    /// ... or within this many ray spacings at their range (far hits of a wide scanner).
+    pub icp_surface_spacings: f64,
     /// A refinement whose field score falls more than this below the correlative pose's is
     /// refused.
     pub max_refine_loss: f64,
@@ -67,13 +80,17 @@ impl Default for FrontEndParams {
             smoothing_m: 0.2,
             linear_window_m: 1.6,
             angular_window_deg: 80.0,
+            rotation_prediction: 0.5,
+            local_quality: 1.0,
+            local_shift_m: 0.1,
+            local_turn_deg: 3.0,
             translation_cost: 0.1,
             rotation_cost: 0.1,
             depth: 4,
             min_quality: 0.45,
             min_points: 20,
             min_range_m: 0.05,
-            max_range_m: 20.0,
+            max_range_m: 49.9,
             voxel_m: 0.05,
             keyframe_distance_m: 0.3,
             keyframe_angle_deg: 10.0,
@@ -81,6 +98,7 @@ impl Default for FrontEndParams {
             refine: true,
             max_refine_shift_m: 0.2,
             icp_surface_m: 0.3,
+            icp_surface_spacings: 3.0,
             max_refine_loss: 0.05,
         }
     }
@@ -113,13 +131,22 @@ impl FrontEndParams {
             ("keyframe_angle_deg", self.keyframe_angle_deg),
             ("translation_cost", self.translation_cost),
             ("rotation_cost", self.rotation_cost),
+            ("icp_surface_spacings", self.icp_surface_spacings),
+            ("local_shift_m", self.local_shift_m),
+            ("local_turn_deg", self.local_turn_deg),
         ] {
             if !(v.is_finite() && v >= 0.0) {
                 return Err(bad(key, v, "must be a number >= 0"));
             }
         }
-        if !(0.0..=1.0).contains(&self.min_quality) {
-            return Err(bad("min_quality", self.min_quality, "must lie in 0..1"));
+        for (key, v) in [
+            ("min_quality", self.min_quality),
+            ("local_quality", self.local_quality),
+            ("rotation_prediction", self.rotation_prediction),
+        ] {
+            if !(0.0..=1.0).contains(&v) {
+                return Err(bad(key, v, "must lie in 0..1"));
+            }
         }
         if self.resolution_m < 0.01 || self.linear_window_m / self.resolution_m > 1000.0 {
             return Err(bad(
@@ -158,6 +185,8 @@ pub enum Placement {
         refined: bool,
         /// True when the scan became a keyframe of the submap.
         keyframe: bool,
+        /// True when the wide search placed it (false: ICP from the prediction).
+        wide: bool,
     },
     /// The scan could not be placed and was left out.
     Skipped {
@@ -215,12 +244,14 @@ impl FrontEnd {
     pub fn new(params: FrontEndParams) -> Result<Self, SlamError> {
         params.validate()?;
         let surface_m = params.icp_surface_m;
+        let surface_spacings = params.icp_surface_spacings;
         Ok(Self {
             params,
             // Real scans with 1 deg rays: neighbouring hits of one wall lie far apart at range.
             match_params: MatchParams {
                 max_rms_m: 0.05,
                 surface_m,
+                surface_spacings,
                 normal_half_length_m: surface_m * 0.6,
                 min_pairs: 30,
                 ..MatchParams::default()
@@ -246,7 +277,7 @@ impl FrontEnd {
                 reason: SkipReason::TooFewHits { hits: points.len() },
             };
         }
-        let (Some(last), Some(grid)) = (self.last, self.grid.as_ref()) else {
+        let (Some(last), true) = (self.last, self.grid.is_some()) else {
             let pose = Pose2::default();
             self.place(pose, geometry, scan, &points, true);
             return Placement::Placed {
@@ -254,35 +285,47 @@ impl FrontEnd {
                 quality: 1.0,
                 refined: false,
                 keyframe: true,
+                wide: false,
             };
         };
         // Constant velocity: the last step again.
-        let guess = match self.before_last {
-            Some(b) => last.compose(&b.inverse().compose(&last)),
-            None => last,
-        };
+        let step = self
+            .before_last
+            .map_or(Pose2::default(), |b| b.inverse().compose(&last));
+        let guess = last.compose(&step);
+        if let Some((pose, quality)) = self.local(geometry, scan, &points, guess) {
+            let keyframe = self.is_keyframe(&pose);
+            self.place(pose, geometry, scan, &points, keyframe);
+            return Placement::Placed {
+                pose,
+                quality,
+                refined: true,
+                keyframe,
+                wide: false,
+            };
+        }
+        let damped = Pose2::new(
+            step.x_m,
+            step.y_m,
+            step.theta_rad * self.params.rotation_prediction,
+        );
+        let centre = last.compose(&damped);
         let window = Window {
             linear_m: self.params.linear_window_m,
             angular_rad: self.params.angular_window_deg.to_radians(),
             translation_cost: self.params.translation_cost,
             rotation_cost: self.params.rotation_cost,
         };
-        let Some(found) = search(grid, &points, &guess, &window, self.params.min_quality) else {
+        let grid = self
+            .grid
+            .as_ref()
+            .expect("a submap exists once a scan is placed");
+        let Some(found) = search(grid, &points, &centre, &window, self.params.min_quality) else {
             return Placement::Skipped {
                 reason: SkipReason::NoMatch,
             };
         };
-        let (pose, refined) = self.refine(geometry, scan, found.pose);
-        let refined_quality = self
-            .grid
-            .as_ref()
-            .map_or(0.0, |g| crate::correlative::quality(g, &points, &pose));
-        let (pose, refined) =
-            if refined && refined_quality < found.quality - self.params.max_refine_loss {
-                (found.pose, false)
-            } else {
-                (pose, refined)
-            };
+        let (pose, refined) = self.refine(geometry, scan, &points, found);
         let keyframe = self.is_keyframe(&pose);
         self.place(pose, geometry, scan, &points, keyframe);
         Placement::Placed {
@@ -290,26 +333,69 @@ impl FrontEnd {
             quality: found.quality,
             refined,
             keyframe,
+            wide: true,
         }
     }
 
-    /// ICP from the correlative pose; the correlative pose when ICP fails or wanders.
-    fn refine(&mut self, geometry: &ScanGeometry, scan: &Scan, coarse: Pose2) -> (Pose2, bool) {
+    /// ICP from the prediction, and its field score, when that reaches `local_quality`.
+    fn local(
+        &mut self,
+        geometry: &ScanGeometry,
+        scan: &Scan,
+        points: &[[f64; 2]],
+        guess: Pose2,
+    ) -> Option<(Pose2, f64)> {
+        if !self.params.refine || self.params.local_quality >= 1.0 {
+            return None;
+        }
+        let p = &self.params;
+        // The prediction is close when scans come fast: a narrow first gate.
+        let params = MatchParams {
+            initial_gate_m: (2.0 * p.local_shift_m).max(self.match_params.final_gate_m),
+            ..self.match_params
+        };
+        let m = self.target.align(geometry, scan, guess, &params)?;
+        if m.pose.position().distance_m(&guess.position()) > p.local_shift_m
+            || angle_diff_rad(m.pose.theta_rad, guess.theta_rad).abs()
+                > p.local_turn_deg.to_radians()
+        {
+            return None;
+        }
+        let quality = crate::correlative::quality(self.grid.as_ref()?, points, &m.pose);
+        tracing::trace!(quality, "local match");
+        (quality >= self.params.local_quality).then_some((m.pose, quality))
+    }
+
+    /// The correlative pose refined by ICP, and whether it was: a refinement that moves too
+    /// far or lowers the field score is refused.
+    fn refine(
+        &mut self,
+        geometry: &ScanGeometry,
+        scan: &Scan,
+        points: &[[f64; 2]],
+        found: crate::correlative::Found,
+    ) -> (Pose2, bool) {
+        let coarse = found.pose;
         if !self.params.refine {
             return (coarse, false);
         }
-        match self
+        let shift = self.params.max_refine_shift_m;
+        let Some(m) = self
             .target
             .align(geometry, scan, coarse, &self.match_params)
-        {
-            Some(m)
-                if m.pose.position().distance_m(&coarse.position())
-                    <= self.params.max_refine_shift_m =>
-            {
-                (m.pose, true)
-            }
-            _ => (coarse, false),
+            .filter(|m| m.pose.position().distance_m(&coarse.position()) <= shift)
+        else {
+            return (coarse, false);
+        };
+        let grid = self
+            .grid
+            .as_ref()
+            .expect("a submap exists once a scan is placed");
+        let refined_quality = crate::correlative::quality(grid, points, &m.pose);
+        if refined_quality < found.quality - self.params.max_refine_loss {
+            return (coarse, false);
         }
+        (m.pose, true)
     }
 
     fn is_keyframe(&self, pose: &Pose2) -> bool {

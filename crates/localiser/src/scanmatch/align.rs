@@ -153,6 +153,7 @@ fn finish(
         pairs,
         worst_sigma_m: worst_position_sigma(&h),
         data_worst_sigma_m: worst_position_sigma(&h_data),
+        data_information: h_data,
         iterations,
     })
 }
@@ -160,27 +161,7 @@ fn finish(
 /// Standard deviation along the worst direction of the position block of the covariance
 /// `h^-1` (3 x 3 information matrix: x, y, theta).
 fn worst_position_sigma(h: &[[f64; 3]; 3]) -> f64 {
-    // Marginal covariance of (x, y): the top-left block of h^-1, from the Schur complement
-    // of the heading entry.
-    let hth = h[2][2];
-    let (a, b, d) = if hth > 0.0 {
-        (
-            h[0][0] - h[0][2] * h[2][0] / hth,
-            h[0][1] - h[0][2] * h[2][1] / hth,
-            h[1][1] - h[1][2] * h[2][1] / hth,
-        )
-    } else {
-        (h[0][0], h[0][1], h[1][1])
-    };
-    // Smallest eigenvalue of the 2 x 2 information block [[a, b], [b, d]].
-    let mean = 0.5 * (a + d);
-    let rad = (0.25 * (a - d).powi(2) + b * b).sqrt();
-    let lmin = mean - rad;
-    if lmin > 1e-12 {
-        1.0 / lmin.sqrt()
-    } else {
-        f64::INFINITY
-    }
+    super::params::worst_position_direction(h).1
 }
 
 /// Solves the 3 x 3 system `a x = b` by Gaussian elimination with partial pivoting.
@@ -313,6 +294,9 @@ mod tests {
         assert!((m.pose.x_m - 0.42).abs() < 1e-3, "{m:?}");
         assert!(m.data_worst_sigma_m > 1.0, "{m:?}");
         assert!((m.worst_sigma_m - p.prior_sigma_m).abs() < 0.01, "{m:?}");
+        // The free direction is along the walls (x).
+        let (dir, sigma) = m.worst_direction();
+        assert!(dir[0].abs() > 0.999 && sigma > 1.0, "{dir:?} {sigma}");
     }
 
     #[test]

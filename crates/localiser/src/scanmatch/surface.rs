@@ -33,9 +33,17 @@ pub(super) fn oriented_hits(
     // Squared thresholds: no square root per neighbour.
     let surface2 = params.surface_m * params.surface_m;
     let half2 = params.normal_half_length_m * params.normal_half_length_m;
+    let spacing = params.surface_spacings * geometry.increment_rad.abs();
     for i in (0..n).step_by(stride.max(1)) {
         let Some(p) = pts[i] else { continue };
         let (px, py) = (p.x_m(), p.y_m());
+        // Far hits lie farther apart: the gates grow with the ray spacing at this range.
+        let gap = spacing * p.range_m();
+        let (surface2, half2) = if gap * gap > surface2 {
+            (gap * gap, half2.max(gap * gap))
+        } else {
+            (surface2, half2)
+        };
         let sums = surface_sums(&pts, i, (px, py), k, surface2, half2);
         if sums.0 < 3.0 {
             continue;
