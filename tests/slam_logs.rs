@@ -21,7 +21,8 @@ fn shared(rel: &str) -> Option<PathBuf> {
 }
 
 fn slam(path: &Path) -> SlamRun {
-    run_log(path, &load_params(None).unwrap()).unwrap()
+    let (front, loops) = load_params(None).unwrap();
+    run_log(path, &front, Some(&loops)).unwrap()
 }
 
 /// The bar on the Intel corrected log, poses ignored: every scan placed, relation error

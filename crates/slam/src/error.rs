@@ -32,4 +32,17 @@ pub enum SlamError {
         /// Poses given.
         got: usize,
     },
+    /// An edge names a node the graph does not have, or joins a node to itself.
+    #[error("edge {from} -> {to} does not join two of the graph's {nodes} nodes")]
+    BadEdge {
+        /// Its first node.
+        from: usize,
+        /// Its second node.
+        to: usize,
+        /// Nodes in the graph.
+        nodes: usize,
+    },
+    /// The pose graph's normal equations could not be solved.
+    #[error("the pose graph is singular: a node is not tied to the first by any measurement")]
+    SingularGraph,
 }

@@ -269,6 +269,11 @@ impl FrontEnd {
         &self.params
     }
 
+    /// The refinement's ICP parameters.
+    pub(crate) fn match_params(&self) -> &MatchParams {
+        &self.match_params
+    }
+
     /// Places the next scan (of `geometry`).
     pub fn add_scan(&mut self, geometry: &ScanGeometry, scan: &Scan) -> Placement {
         let points = thin_hits(geometry, scan, &self.params);
@@ -458,7 +463,11 @@ impl FrontEnd {
 }
 
 /// The scan's hits within the range limits, robot frame, one per `voxel_m` cell (the first).
-fn thin_hits(geometry: &ScanGeometry, scan: &Scan, params: &FrontEndParams) -> Vec<[f64; 2]> {
+pub(crate) fn thin_hits(
+    geometry: &ScanGeometry,
+    scan: &Scan,
+    params: &FrontEndParams,
+) -> Vec<[f64; 2]> {
     let mut out: Vec<[f64; 2]> = Vec::new();
     let mut seen = std::collections::HashSet::new();
     for (_, p) in scan.robot_hits(geometry) {

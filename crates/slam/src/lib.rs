@@ -13,9 +13,12 @@ mod correlative;
 mod error;
 pub mod eval;
 mod frontend;
+pub mod graph;
 mod grid;
 mod log_run;
+mod loops;
 
 pub use error::SlamError;
 pub use frontend::{FrontEnd, FrontEndParams, Placement, SkipReason};
 pub use log_run::{Evaluation, LogRun, Placed, Skip, SlamReport, SlamRun};
+pub use loops::{Closure, LoopParams, LoopReport, close_loops};

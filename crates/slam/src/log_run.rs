@@ -8,7 +8,7 @@ use scan_types::{Pose2, Scan, ScanGeometry};
 use serde::Serialize;
 
 use crate::eval::{RelativeError, Stats, absolute_error, relative_error};
-use crate::{FrontEnd, FrontEndParams, Placement, SlamError};
+use crate::{FrontEnd, FrontEndParams, LoopParams, LoopReport, Placement, SlamError, close_loops};
 
 /// One placed scan.
 #[derive(Debug, Clone)]
@@ -59,6 +59,10 @@ pub struct SlamReport {
     pub map_consistency: f64,
     /// Against the log's reference poses, when every placed scan has one.
     pub evaluation: Option<Evaluation>,
+    /// Loop closure, when it ran (`None`: the front end alone).
+    pub loop_closure: Option<LoopReport>,
+    /// Loop closure's parameters, when it ran.
+    pub loop_params: Option<LoopParams>,
     /// The front end's parameters.
     pub params: FrontEndParams,
 }
@@ -148,6 +152,34 @@ impl LogRun {
     /// Ends the run; `malformed_records` is the count of records the reader skipped.
     pub fn finish(self, malformed_records: usize) -> SlamRun {
         let total_time_s = self.started.elapsed().as_secs_f64();
+        self.report(malformed_records, total_time_s, None)
+    }
+
+    /// Ends the run with loop closure over the front end's trajectory ([`close_loops`]):
+    /// the placed poses become the optimised ones.
+    pub fn finish_with_loops(
+        mut self,
+        malformed_records: usize,
+        params: &LoopParams,
+    ) -> Result<SlamRun, SlamError> {
+        let scans: Vec<&Scan> = self.placed.iter().map(|p| &p.scan).collect();
+        let poses: Vec<Pose2> = self.placed.iter().map(|p| p.pose).collect();
+        let (poses, loops) = close_loops(&self.geometry, &scans, &poses, self.fe.params(), params)?;
+        for (p, pose) in self.placed.iter_mut().zip(poses) {
+            p.pose = pose;
+        }
+        let total_time_s = self.started.elapsed().as_secs_f64();
+        let mut run = self.report(malformed_records, total_time_s, Some(loops));
+        run.report.loop_params = Some(params.clone());
+        Ok(run)
+    }
+
+    fn report(
+        self,
+        malformed_records: usize,
+        total_time_s: f64,
+        loop_closure: Option<LoopReport>,
+    ) -> SlamRun {
         let Self {
             fe,
             name,
@@ -181,6 +213,8 @@ impl LogRun {
                 .sum(),
             map_consistency: 0.0,
             evaluation: evaluate(&placed),
+            loop_closure,
+            loop_params: None,
             params: fe.params().clone(),
         };
         SlamRun {

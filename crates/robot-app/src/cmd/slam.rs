@@ -12,7 +12,7 @@ use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use scan_log::{LogOptions, LogSource};
 use scan_types::LaserSource;
 
-use slam::{FrontEndParams, LogRun, SlamRun};
+use slam::{FrontEndParams, LogRun, LoopParams, SlamRun};
 
 use crate::outputs::write_atomic;
 use scan_log::tum;
@@ -26,9 +26,13 @@ pub struct SlamArgs {
     /// Output folder (created if missing).
     #[arg(long, default_value = "goalseek-slam")]
     pub out: PathBuf,
-    /// TOML file overriding front-end parameters (see docs/slam.md).
+    /// TOML file overriding front-end parameters, and loop-closure ones in a
+    /// `[loop_closure]` table (see docs/slam.md).
     #[arg(long, value_name = "FILE")]
     pub config: Option<PathBuf>,
+    /// The front end alone: no loop closure, no pose graph (for comparison).
+    #[arg(long)]
+    pub no_loop_closure: bool,
     /// Map cell side, metres.
     #[arg(long, default_value_t = 0.05)]
     pub resolution: f64,
@@ -37,19 +41,32 @@ pub struct SlamArgs {
     pub max_range: f64,
 }
 
-/// Loads front-end parameters: the defaults overridden by a TOML file.
-pub fn load_params(path: Option<&Path>) -> anyhow::Result<FrontEndParams> {
+/// Front-end and loop-closure parameters: the defaults overridden by a TOML file (front-end
+/// keys at the top level, loop-closure keys in a `[loop_closure]` table).
+pub fn load_params(path: Option<&Path>) -> anyhow::Result<(FrontEndParams, LoopParams)> {
     let Some(p) = path else {
-        return Ok(FrontEndParams::default());
+        return Ok((FrontEndParams::default(), LoopParams::default()));
     };
     let text = std::fs::read_to_string(p)
         .with_context(|| format!("cannot read config {}", p.display()))?;
-    let params: FrontEndParams =
+    let mut table: toml::Table =
         toml::from_str(&text).with_context(|| format!("config {}", p.display()))?;
-    params
+    let loops: LoopParams = match table.remove("loop_closure") {
+        Some(v) => v
+            .try_into()
+            .with_context(|| format!("config {}: [loop_closure]", p.display()))?,
+        None => LoopParams::default(),
+    };
+    let front: FrontEndParams = table
+        .try_into()
+        .with_context(|| format!("config {}", p.display()))?;
+    front
         .validate()
         .with_context(|| format!("config {}", p.display()))?;
-    Ok(params)
+    loops
+        .validate()
+        .with_context(|| format!("config {}: [loop_closure]", p.display()))?;
+    Ok((front, loops))
 }
 
 /// A progress bar on stderr that shows itself once the run has taken a second.
@@ -82,8 +99,13 @@ impl Progress {
     }
 }
 
-/// Runs the front end over every scan of `path` ([`slam::LogRun`]).
-pub fn run_log(path: &Path, params: &FrontEndParams) -> anyhow::Result<SlamRun> {
+/// Runs the front end over every scan of `path` ([`slam::LogRun`]), then loop closure unless
+/// `loops` is `None`.
+pub fn run_log(
+    path: &Path,
+    params: &FrontEndParams,
+    loops: Option<&LoopParams>,
+) -> anyhow::Result<SlamRun> {
     let mut source = LogSource::open(path, &LogOptions::default())
         .with_context(|| format!("opening the log {}", path.display()))?;
     let name = path.display().to_string();
@@ -98,7 +120,12 @@ pub fn run_log(path: &Path, params: &FrontEndParams) -> anyhow::Result<SlamRun> 
         progress.tick();
         run.add(rec.line, &rec.geometry, &rec.scan, rec.pose);
     }
-    let run = run.finish(source.skipped());
+    let run = match loops {
+        Some(l) => run
+            .finish_with_loops(source.skipped(), l)
+            .context("loop closure")?,
+        None => run.finish(source.skipped()),
+    };
     progress.bar.finish_and_clear();
     Ok(run)
 }
@@ -134,10 +161,17 @@ pub fn write_outputs(
 /// Runs `robot-app slam`.
 pub fn run(args: SlamArgs) -> anyhow::Result<()> {
     super::check_map_options(args.resolution, args.max_range)?;
-    let params = load_params(args.config.as_deref())?;
-    let mut run = run_log(&args.log, &params)?;
+    let (params, loops) = load_params(args.config.as_deref())?;
+    let loops = (!args.no_loop_closure).then_some(&loops);
+    let mut run = run_log(&args.log, &params, loops)?;
     write_outputs(&args.out, &mut run, args.resolution, args.max_range)?;
     let r = &run.report;
+    let closures = r.loop_closure.as_ref().map_or(String::new(), |l| {
+        format!(
+            "; loop closures {} accepted, {} rejected",
+            l.accepted, l.rejected
+        )
+    });
     let eval = r.evaluation.as_ref().map_or(String::new(), |e| {
         format!(
             "; against the log's poses: k->k+1 {:.3} m {:.2} deg, ATE {:.3} m",
@@ -147,7 +181,7 @@ pub fn run(args: SlamArgs) -> anyhow::Result<()> {
     #[allow(clippy::print_stdout)]
     {
         println!(
-            "{}: {} of {} scans placed, {} skipped; {:.2} ms per scan (median), map consistency {:.1} %, start to end {:.2} m{eval}; outputs in {}",
+            "{}: {} of {} scans placed, {} skipped; {:.2} ms per scan (median), map consistency {:.1} %, start to end {:.2} m{closures}{eval}; outputs in {}",
             args.log.display(),
             r.placed,
             r.scans,

@@ -1,0 +1,362 @@
+//! Loop closure over a front end's trajectory: every few scans, the scan is matched against
+//! submaps of earlier scans near its estimate (branch and bound, then ICP); an accepted match
+//! becomes a robust edge of a pose graph of all scans, which is optimised as it grows.
+
+use localiser::{MatchParams, MatchTarget};
+use scan_types::{Pose2, Scan, ScanGeometry};
+use serde::{Deserialize, Serialize};
+
+use crate::correlative::{Window, search};
+use crate::frontend::thin_hits;
+use crate::graph::{Edge, OptimiseParams, PoseGraph};
+use crate::grid::ScoreGrid;
+use crate::{FrontEndParams, SlamError};
+
+/// Tuning of loop closure and the pose graph.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct LoopParams {
+    /// Try to close a loop at every this many placed scans.
+    pub every: usize,
+    /// A candidate is at least this many placed scans older than the scan.
+    pub min_separation: usize,
+    /// Candidates lie within this of the scan's estimate, metres.
+    pub search_radius_m: f64,
+    /// At most this many candidates (the nearest, from distinct places) per attempt.
+    pub max_candidates: usize,
+    /// A candidate's submap holds this many placed scans on each side of it.
+    pub submap_half_scans: usize,
+    /// Half-width of the translation search around the estimate, metres.
+    pub linear_window_m: f64,
+    /// Half-width of the rotation search around the estimate, degrees.
+    pub angular_window_deg: f64,
+    /// A match is accepted when its field score reaches this (0..1).
+    pub min_quality: f64,
+    /// Standard deviation of a front-end step along x and y, metres, plus
+    /// `odometry_sigma_per_m` of its length ...
+    pub odometry_sigma_m: f64,
+    /// ... (share of the step's length) ...
+    pub odometry_sigma_per_m: f64,
+    /// ... and of its heading, degrees, plus `odometry_sigma_per_rad` of its turn.
+    pub odometry_sigma_deg: f64,
+    /// Share of the step's turn added to its heading's standard deviation.
+    pub odometry_sigma_per_rad: f64,
+    /// The graph is optimised as closures come when one of them is this many standard
+    /// deviations off the graph (and once at the end).
+    pub reoptimise_sigmas: f64,
+    /// Standard deviation of a closure along x and y, metres ...
+    pub closure_sigma_m: f64,
+    /// ... and of its heading, degrees.
+    pub closure_sigma_deg: f64,
+    /// Scale of the Cauchy loss of closures, in standard deviations.
+    pub cauchy_scale: f64,
+    /// A closure whose weight under the loss ends below this is counted as rejected.
+    pub reject_weight: f64,
+}
+
+impl Default for LoopParams {
+    fn default() -> Self {
+        Self {
+            every: 3,
+            min_separation: 40,
+            search_radius_m: 4.0,
+            max_candidates: 2,
+            submap_half_scans: 8,
+            linear_window_m: 1.5,
+            angular_window_deg: 25.0,
+            min_quality: 0.6,
+            odometry_sigma_m: 0.01,
+            odometry_sigma_per_m: 0.05,
+            odometry_sigma_deg: 0.2,
+            odometry_sigma_per_rad: 0.02,
+            reoptimise_sigmas: 3.0,
+            closure_sigma_m: 0.05,
+            closure_sigma_deg: 1.0,
+            cauchy_scale: 1.0,
+            reject_weight: 0.1,
+        }
+    }
+}
+
+impl LoopParams {
+    /// Checks every value against its range; the error names the key.
+    pub fn validate(&self) -> Result<(), SlamError> {
+        let bad = |key, value: f64, requirement| SlamError::InvalidParam {
+            key,
+            value: value.to_string(),
+            requirement,
+        };
+        for (key, v) in [
+            ("search_radius_m", self.search_radius_m),
+            ("odometry_sigma_m", self.odometry_sigma_m),
+            ("odometry_sigma_deg", self.odometry_sigma_deg),
+            ("closure_sigma_m", self.closure_sigma_m),
+            ("closure_sigma_deg", self.closure_sigma_deg),
+            ("cauchy_scale", self.cauchy_scale),
+            ("reoptimise_sigmas", self.reoptimise_sigmas),
+        ] {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(bad(key, v, "must be a positive number"));
+            }
+        }
+        for (key, v) in [
+            ("odometry_sigma_per_m", self.odometry_sigma_per_m),
+            ("odometry_sigma_per_rad", self.odometry_sigma_per_rad),
+            ("linear_window_m", self.linear_window_m),
+            ("angular_window_deg", self.angular_window_deg),
+        ] {
+            if !(v.is_finite() && (0.0..=100.0).contains(&v)) {
+                return Err(bad(key, v, "must lie in 0..100"));
+            }
+        }
+        for (key, v) in [
+            ("min_quality", self.min_quality),
+            ("reject_weight", self.reject_weight),
+        ] {
+            if !(0.0..=1.0).contains(&v) {
+                return Err(bad(key, v, "must lie in 0..1"));
+            }
+        }
+        if self.every == 0 {
+            return Err(bad("every", 0.0, "must be at least 1"));
+        }
+        Ok(())
+    }
+}
+
+/// What loop closure found, for `slam.json`.
+#[derive(Debug, Clone, Default, Serialize)]
+pub struct LoopReport {
+    /// Submap matches tried.
+    pub tried: usize,
+    /// Matches that scored `min_quality` and entered the graph.
+    pub found: usize,
+    /// Of those, the ones the optimised graph keeps (weight at least `reject_weight`).
+    pub accepted: usize,
+    /// Of those, the ones the loss weighed down (outliers).
+    pub rejected: usize,
+    /// Each closure: the older scan, the newer one (indices among the placed scans), its
+    /// score, and whether it was kept.
+    pub closures: Vec<Closure>,
+    /// Optimisations run.
+    pub optimisations: usize,
+}
+
+/// One loop closure.
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct Closure {
+    /// The older scan (index among the placed scans).
+    pub from: usize,
+    /// The newer scan.
+    pub to: usize,
+    /// The match's field score.
+    pub quality: f64,
+    /// Kept by the optimised graph.
+    pub accepted: bool,
+}
+
+/// The front end's trajectory `poses` (of `scans`, all of `geometry`) corrected by loop
+/// closure, and what closure found.
+///
+/// Every `every`-th scan is a node of the graph; consecutive nodes are joined by the front
+/// end's relative pose, and the scans between them follow their node rigidly.
+pub fn close_loops(
+    geometry: &ScanGeometry,
+    scans: &[&Scan],
+    poses: &[Pose2],
+    front: &FrontEndParams,
+    params: &LoopParams,
+) -> Result<(Vec<Pose2>, LoopReport), SlamError> {
+    params.validate()?;
+    let n = poses.len().min(scans.len());
+    let mut report = LoopReport::default();
+    if n < 2 {
+        return Ok((poses.to_vec(), report));
+    }
+    let every = params.every;
+    let match_params = *crate::FrontEnd::new(front.clone())?.match_params();
+    let optimise = OptimiseParams {
+        cauchy_scale: params.cauchy_scale,
+        ..OptimiseParams::default()
+    };
+    let incremental = OptimiseParams {
+        max_iterations: 2,
+        ..optimise
+    };
+    let points: Vec<Vec<[f64; 2]>> = scans[..n]
+        .iter()
+        .map(|s| thin_hits(geometry, s, front))
+        .collect();
+    // Each scan relative to its node (scan `m * every` is node m).
+    let relative: Vec<Pose2> = (0..n)
+        .map(|s| poses[s - s % every].inverse().compose(&poses[s]))
+        .collect();
+    let nodes = n.div_ceil(every);
+    let mut graph = PoseGraph::new(vec![poses[0]]);
+    for m in 1..nodes {
+        let step = poses[(m - 1) * every].inverse().compose(&poses[m * every]);
+        let last = graph.nodes[m - 1];
+        graph.nodes.push(last.compose(&step));
+        let along = params.odometry_sigma_m * (every as f64).sqrt()
+            + params.odometry_sigma_per_m * step.x_m.hypot(step.y_m);
+        let turn = params.odometry_sigma_deg.to_radians() * (every as f64).sqrt()
+            + params.odometry_sigma_per_rad * step.theta_rad.abs();
+        graph.add_edge(Edge {
+            from: m - 1,
+            to: m,
+            measured: step,
+            sigma: [along, along, turn],
+            robust: false,
+        })?;
+        let i = m * every;
+        if i < params.min_separation {
+            continue;
+        }
+        let estimates: Vec<Pose2> = (0..=i)
+            .map(|s| graph.nodes[s / every].compose(&relative[s]))
+            .collect();
+        let mut off = false;
+        for j in candidates(&graph.nodes, m, every, params) {
+            report.tried += 1;
+            let Some((pose, quality)) = match_submap(
+                geometry,
+                scans,
+                &points,
+                &estimates,
+                (j * every, i),
+                (front, &match_params, params),
+            ) else {
+                continue;
+            };
+            let edge = Edge {
+                from: j,
+                to: m,
+                measured: graph.nodes[j].inverse().compose(&pose),
+                sigma: [
+                    params.closure_sigma_m,
+                    params.closure_sigma_m,
+                    params.closure_sigma_deg.to_radians(),
+                ],
+                robust: true,
+            };
+            // Before it enters, the graph puts the scan where the front end's chain does.
+            let r = graph.residual(&edge);
+            off |= r.iter().any(|v| v.abs() > params.reoptimise_sigmas);
+            graph.add_edge(edge)?;
+            report.closures.push(Closure {
+                from: j * every,
+                to: i,
+                quality,
+                accepted: true,
+            });
+        }
+        if off {
+            graph.optimise(&incremental)?;
+            report.optimisations += 1;
+        }
+    }
+    graph.optimise(&optimise)?;
+    report.optimisations += 1;
+    let weights: Vec<f64> = graph
+        .edges
+        .iter()
+        .filter(|e| e.robust)
+        .map(|e| graph.weight(e, &optimise))
+        .collect();
+    for (c, w) in report.closures.iter_mut().zip(weights) {
+        c.accepted = w >= params.reject_weight;
+    }
+    report.found = report.closures.len();
+    report.accepted = report.closures.iter().filter(|c| c.accepted).count();
+    report.rejected = report.found - report.accepted;
+    let corrected = (0..n)
+        .map(|s| graph.nodes[s / every].compose(&relative[s]))
+        .collect();
+    Ok((corrected, report))
+}
+
+/// The nearest earlier nodes to node `m` (of `every` scans each) within the search radius, at
+/// least `min_separation` scans older, from distinct places (more than a submap apart).
+fn candidates(nodes: &[Pose2], m: usize, every: usize, params: &LoopParams) -> Vec<usize> {
+    let here = nodes[m].position();
+    let newest = (m * every).saturating_sub(params.min_separation) / every;
+    let mut near: Vec<(f64, usize)> = (0..=newest.min(m.saturating_sub(1)))
+        .map(|j| (nodes[j].position().distance_m(&here), j))
+        .filter(|(d, _)| *d <= params.search_radius_m)
+        .collect();
+    near.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let mut chosen: Vec<usize> = Vec::new();
+    for (_, j) in near {
+        if chosen.len() >= params.max_candidates {
+            break;
+        }
+        if chosen
+            .iter()
+            .all(|&c| (c * every).abs_diff(j * every) > 2 * params.submap_half_scans)
+        {
+            chosen.push(j);
+        }
+    }
+    chosen
+}
+
+/// Scan `i` matched against the submap of the scans around `j` (at their estimates): its
+/// pose and score, when the score reaches `min_quality`.
+fn match_submap(
+    geometry: &ScanGeometry,
+    scans: &[&Scan],
+    points: &[Vec<[f64; 2]>],
+    nodes: &[Pose2],
+    (j, i): (usize, usize),
+    (front, match_params, params): (&FrontEndParams, &MatchParams, &LoopParams),
+) -> Option<(Pose2, f64)> {
+    if points[i].len() < front.min_points {
+        return None;
+    }
+    let lo = j.saturating_sub(params.submap_half_scans);
+    let hi = (j + params.submap_half_scans).min(i.saturating_sub(params.min_separation));
+    let mut world = Vec::new();
+    let mut target = MatchTarget::new();
+    for k in lo..=hi {
+        let (s, c) = nodes[k].theta_rad.sin_cos();
+        world.extend(points[k].iter().map(|p| {
+            [
+                nodes[k].x_m + c * p[0] - s * p[1],
+                nodes[k].y_m + s * p[0] + c * p[1],
+            ]
+        }));
+        target.add_scan(&nodes[k], geometry, scans[k], match_params);
+    }
+    let window_cells = (params.linear_window_m / front.resolution_m).ceil() as usize + 1;
+    let grid = ScoreGrid::new(
+        &world,
+        front.resolution_m,
+        front.smoothing_m,
+        front.depth,
+        window_cells,
+    )?;
+    let window = Window {
+        linear_m: params.linear_window_m,
+        angular_rad: params.angular_window_deg.to_radians(),
+        translation_cost: 0.0,
+        rotation_cost: 0.0,
+    };
+    let found = search(&grid, &points[i], &nodes[i], &window, params.min_quality)?;
+    let refined = target
+        .align(geometry, scans[i], found.pose, match_params)
+        .filter(|m| {
+            m.pose.position().distance_m(&found.pose.position()) <= front.max_refine_shift_m
+        })
+        .map(|m| m.pose);
+    let pose = match refined {
+        Some(p)
+            if crate::correlative::quality(&grid, &points[i], &p)
+                >= found.quality - front.max_refine_loss =>
+        {
+            p
+        }
+        _ => found.pose,
+    };
+    tracing::debug!(j, i, quality = found.quality, "loop closure");
+    Some((pose, found.quality))
+}
