@@ -59,9 +59,9 @@ pub use foreign::{
     FOXGLOVE_LASER_SCAN, INVALID_ABOVE_MAX, INVALID_BELOW_MIN, INVALID_NAN, ROS2_LASER_SCAN,
 };
 pub use mcap_io::{
-    EST_POSE_TOPIC, McapRecorder, MetadataRecord, SCAN_TOPIC, STATUS_HIT, STATUS_MAX_RANGE,
-    TRUE_POSE_TOPIC, parse_mcap, partial_path, read_mcap, read_mcap_metadata, read_mcap_topic,
-    recording_schemas,
+    EST_POSE_TOPIC, MAX_MCAP_RECORD_BYTES, McapRecorder, MetadataRecord, SCAN_TOPIC, STATUS_HIT,
+    STATUS_MAX_RANGE, TRUE_POSE_TOPIC, parse_mcap, partial_path, read_mcap, read_mcap_metadata,
+    read_mcap_topic, recording_schemas,
 };
 pub use playback::{
     GeometryOverride, LoopingLog, RecordedLaser, RecordedTruth, open_log, open_log_topic,

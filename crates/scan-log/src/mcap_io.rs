@@ -580,17 +580,7 @@ pub(crate) fn scan_mcap(bytes: &[u8], path: &Path) -> Found {
     // Index into the entries of goalseek's scan topic of each scan sequence number.
     let mut by_seq: BTreeMap<u64, usize> = BTreeMap::new();
     let mut kinds: BTreeMap<u16, Option<Kind>> = BTreeMap::new();
-    let stream = match mcap::MessageStream::new_with_options(bytes, Options::IgnoreEndMagic.into())
-    {
-        Ok(s) => s,
-        Err(source) => {
-            found.tail.push(LogError::Mcap {
-                path: path.to_path_buf(),
-                source,
-            });
-            return found;
-        }
-    };
+    let stream = Messages::new(bytes);
     let mut messages = 0usize;
     for (index, msg) in stream.enumerate() {
         let msg = match msg {
@@ -690,6 +680,48 @@ pub(crate) fn scan_mcap(bytes: &[u8], path: &Path) -> Found {
         });
     }
     found
+}
+
+/// The largest MCAP record (or decompressed chunk) read: a damaged length field beyond it is
+/// refused instead of allocated.
+pub const MAX_MCAP_RECORD_BYTES: usize = 64 << 20;
+
+/// The messages of MCAP bytes in file order, each record and chunk at most
+/// [`MAX_MCAP_RECORD_BYTES`] (`mcap::MessageStream` sets no limit inside chunks).
+struct Messages<'a> {
+    reader: mcap::sans_io::MessageReader,
+    rest: &'a [u8],
+}
+
+impl<'a> Messages<'a> {
+    fn new(bytes: &'a [u8]) -> Self {
+        let options = mcap::sans_io::LinearReaderOptions::default()
+            .with_skip_end_magic(true)
+            .with_record_length_limit(MAX_MCAP_RECORD_BYTES);
+        Messages {
+            reader: mcap::sans_io::MessageReader::new_with_options(options),
+            rest: bytes,
+        }
+    }
+}
+
+impl Iterator for Messages<'_> {
+    type Item = Result<mcap::Message<'static>, mcap::McapError>;
+
+    fn next(&mut self) -> Option<Self::Item> {
+        loop {
+            match self.reader.next_event()? {
+                Ok(mcap::sans_io::MessageReadEvent::ReadRequest(need)) => {
+                    let n = need.min(self.rest.len());
+                    self.reader.insert(n).copy_from_slice(&self.rest[..n]);
+                    self.reader.notify_read(n);
+                    self.rest = &self.rest[n..];
+                }
+                Ok(mcap::sans_io::MessageReadEvent::Message(m)) => return Some(Ok(m)),
+                Err(e) => return Some(Err(e)),
+            }
+        }
+    }
 }
 
 /// A JSON `foxglove.LaserScan`: goalseek's exact scan (with its sequence number) or plain.

@@ -314,3 +314,39 @@ fn a_bag_is_a_laser_source() {
     }
     assert_eq!(n, exp["count"].as_u64().unwrap());
 }
+
+mod damaged {
+    use super::fixture;
+    use proptest::prelude::*;
+    use std::path::Path;
+
+    /// Compressed files of other writers: zstd (Foxglove SDK), lz4 (mcap-ros2-support).
+    const FILES: [&str; 3] = [
+        "foxglove_protobuf.mcap",
+        "ros2_lz4.mcap",
+        "goalseek_zstd.mcap",
+    ];
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(200))]
+
+        /// Any byte changed to any value, in a compressed chunk or elsewhere: records or
+        /// errors, never a panic.
+        #[test]
+        fn a_changed_byte_never_panics(file in 0..FILES.len(), at in any::<prop::sample::Index>(), value in any::<u8>()) {
+            let mut bytes = std::fs::read(fixture(FILES[file])).unwrap();
+            let i = at.index(bytes.len());
+            bytes[i] = value;
+            let _ = scan_log::parse_mcap(&bytes, Path::new(FILES[file]));
+        }
+
+        /// A file cut anywhere gives the scans before the cut and an error, never a panic.
+        #[test]
+        fn a_cut_file_never_panics(file in 0..FILES.len(), at in any::<prop::sample::Index>()) {
+            let bytes = std::fs::read(fixture(FILES[file])).unwrap();
+            let cut = &bytes[..at.index(bytes.len())];
+            let records = scan_log::parse_mcap(cut, Path::new(FILES[file]));
+            prop_assert!(records.iter().any(Result::is_err));
+        }
+    }
+}
