@@ -114,6 +114,12 @@ fn scan_db3(path: &Path) -> Result<Found, LogError> {
 /// The storage files of a bag folder, from its `metadata.yaml`.
 fn bag_files(dir: &Path) -> Result<Vec<PathBuf>, LogError> {
     let meta_path = dir.join(BAG_METADATA);
+    if !meta_path.is_file() {
+        return Err(bag_error(
+            dir,
+            format!("a folder without {BAG_METADATA}, not a rosbag2 bag"),
+        ));
+    }
     let text = std::fs::read_to_string(&meta_path).map_err(|source| LogError::Io {
         path: meta_path.clone(),
         source,

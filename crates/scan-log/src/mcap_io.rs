@@ -11,7 +11,7 @@ use scan_types::{Pose2, RayStatus, Scan, ScanGeometry};
 use serde::{Deserialize, Serialize};
 
 use crate::foreign::{self, FOXGLOVE_LASER_SCAN, ROS2_LASER_SCAN};
-use crate::topics::Found;
+use crate::topics::{Decoded, Found};
 use crate::{LogError, LogRecord};
 
 /// Topic of the scans.
@@ -606,19 +606,19 @@ pub(crate) fn scan_mcap(bytes: &[u8], path: &Path) -> Found {
             .or_insert_with(|| channel_kind(&msg.channel));
         let decoded = match kind {
             Some(Kind::Json) => match decode_json_scan(&msg.data) {
-                Ok(Decoded::Exact((seq, rec))) if topic == SCAN_TOPIC => {
+                Ok(JsonScan::Exact((seq, rec))) if topic == SCAN_TOPIC => {
                     by_seq.insert(seq, found.laser_topic(topic).entries.len());
-                    Ok(crate::topics::Decoded::Exact(rec))
+                    Ok(Decoded::Exact(rec))
                 }
-                Ok(Decoded::Exact((_, rec))) => Ok(crate::topics::Decoded::Exact(rec)),
-                Ok(Decoded::Foreign(s)) => Ok(crate::topics::Decoded::Foreign(s)),
+                Ok(JsonScan::Exact((_, rec))) => Ok(Decoded::Exact(rec)),
+                Ok(JsonScan::Foreign(s)) => Ok(Decoded::Foreign(s)),
                 Err(m) => Err(bad(m)),
             },
             Some(Kind::Cdr) => foreign::decode_ros2_laser_scan(&msg.data)
-                .map(crate::topics::Decoded::Foreign)
+                .map(Decoded::Foreign)
                 .map_err(|m| bad(format!("not a CDR {ROS2_LASER_SCAN}: {m}"))),
             Some(Kind::Protobuf) => foreign::decode_foxglove_protobuf(&msg.data)
-                .map(crate::topics::Decoded::Foreign)
+                .map(Decoded::Foreign)
                 .map_err(|m| bad(format!("not a protobuf {FOXGLOVE_LASER_SCAN}: {m}"))),
             None if topic == TRUE_POSE_TOPIC || topic == EST_POSE_TOPIC => {
                 let pose: PoseMsg = match serde_json::from_slice(&msg.data) {
@@ -637,7 +637,7 @@ pub(crate) fn scan_mcap(bytes: &[u8], path: &Path) -> Found {
                 };
                 let scans = &mut found.laser_topic(SCAN_TOPIC).entries;
                 let rec = by_seq.get(&g.seq).and_then(|&i| match scans.get_mut(i) {
-                    Some(Ok(crate::topics::Decoded::Exact(r))) => Some(r),
+                    Some(Ok(Decoded::Exact(r))) => Some(r),
                     _ => None,
                 });
                 match rec {
@@ -725,7 +725,7 @@ impl Iterator for Messages<'_> {
 }
 
 /// A JSON `foxglove.LaserScan`: goalseek's exact scan (with its sequence number) or plain.
-enum Decoded {
+enum JsonScan {
     Exact((u64, LogRecord)),
     Foreign(foreign::ForeignScan),
 }
@@ -739,12 +739,12 @@ struct ScanJson {
     goalseek: Option<ScanExtra>,
 }
 
-fn decode_json_scan(data: &[u8]) -> Result<Decoded, String> {
+fn decode_json_scan(data: &[u8]) -> Result<JsonScan, String> {
     let m: ScanJson = serde_json::from_slice(data)
         .map_err(|e| format!("not a {FOXGLOVE_LASER_SCAN} in JSON: {e}"))?;
     match m.goalseek {
-        Some(x) => decode_scan(m.ranges, m.intensities, x).map(Decoded::Exact),
-        None => foreign::decode_foxglove_json(data).map(Decoded::Foreign),
+        Some(x) => decode_scan(m.ranges, m.intensities, x).map(JsonScan::Exact),
+        None => foreign::decode_foxglove_json(data).map(JsonScan::Foreign),
     }
 }
 

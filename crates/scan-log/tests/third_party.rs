@@ -350,3 +350,14 @@ mod damaged {
         }
     }
 }
+
+#[test]
+fn a_folder_that_is_not_a_bag_says_so() {
+    let dir = tempfile::tempdir().unwrap();
+    let e = open_err(dir.path(), None);
+    assert!(
+        e.to_string()
+            .contains("a folder without metadata.yaml, not a rosbag2 bag"),
+        "{e}"
+    );
+}
