@@ -56,6 +56,7 @@ fn replay_args(file: std::path::PathBuf) -> ReplayArgs {
         file,
         rate: 0.0,
         sensor: None,
+        topic: None,
         count: None,
         format: ScanFormat::Csv,
         record: None,

@@ -53,8 +53,18 @@ impl std::ops::DerefMut for Recorder {
 /// Opens a log (CARMEN, BreezySLAM, goalseek MCAP), with an optional sensor preset name
 /// (`paper`, `urg-04lx`, `utm-30lx`) overriding its geometry (see [`scan_log::open_log`]).
 pub fn open_log(path: &Path, sensor: Option<&str>) -> anyhow::Result<LogSource> {
+    open_log_topic(path, sensor, None)
+}
+
+/// Opens a log as [`open_log`] does, reading the laser topic `topic` of a bag or MCAP file
+/// (`None`: its only one; see [`scan_log::open_log_topic`]).
+pub fn open_log_topic(
+    path: &Path,
+    sensor: Option<&str>,
+    topic: Option<&str>,
+) -> anyhow::Result<LogSource> {
     let preset = sensor.map(sensor_override).transpose()?;
-    scan_log::open_log(path, preset.as_ref())
+    scan_log::open_log_topic(path, preset.as_ref(), topic)
         .with_context(|| format!("opening the log {}", path.display()))
 }
 

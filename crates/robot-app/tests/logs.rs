@@ -16,6 +16,7 @@ fn replay_args(file: PathBuf) -> ReplayArgs {
         file,
         rate: 0.0,
         sensor: None,
+        topic: None,
         count: None,
         format: ScanFormat::Csv,
         record: None,
@@ -117,6 +118,7 @@ fn emulate_source_serves_a_recording_over_scip() {
         noise: Noise::Off,
         no_stdin: true,
         source: Some(path),
+        topic: None,
     })
     .unwrap();
     let mut out = Vec::new();

@@ -104,6 +104,7 @@ fn scan_sim_and_emulate_sim_agree() {
         noise: Noise::Off,
         no_stdin: true,
         source: None,
+        topic: None,
     })
     .unwrap();
     let mut out = Vec::new();

@@ -49,10 +49,49 @@ pub enum LogError {
         message: String,
     },
     /// The file's format cannot be told from its name or its first bytes.
-    #[error("{}: unknown log format (expected a CARMEN .log/.log.gz/.clf, a BreezySLAM .dat or an .mcap recording)", path.display())]
+    #[error("{}: unknown log format (goalseek reads CARMEN .log/.clf, BreezySLAM .dat, MCAP files and rosbag2 bags: {})", path.display(), crate::topics::SUPPORTED_TOPICS)]
     UnknownFormat {
         /// The file.
         path: PathBuf,
+    },
+    /// A bag or MCAP file holds nothing goalseek reads as laser scans.
+    #[error("{}: {found}; goalseek reads {}", path.display(), crate::topics::SUPPORTED_TOPICS)]
+    Unsupported {
+        /// The file (or bag folder).
+        path: PathBuf,
+        /// What it holds instead.
+        found: String,
+    },
+    /// A file holds several laser topics and none was chosen.
+    #[error("{}: several laser scan topics ({}); choose one with --topic", path.display(), topics.join(", "))]
+    SeveralTopics {
+        /// The file (or bag folder).
+        path: PathBuf,
+        /// Its laser topics.
+        topics: Vec<String>,
+    },
+    /// The topic asked for is not a laser topic of the file.
+    #[error("{}: no laser scan topic {topic} (laser topics: {}; other topics: {})", path.display(), list(laser_topics), list(other_topics))]
+    NoSuchTopic {
+        /// The file (or bag folder).
+        path: PathBuf,
+        /// The topic asked for.
+        topic: String,
+        /// The file's laser topics.
+        laser_topics: Vec<String>,
+        /// The file's other topics, each as `topic (type)`.
+        other_topics: Vec<String>,
+    },
+    /// A rosbag2 SQLite file or bag folder cannot be read.
+    #[error("{}: rosbag2 bag: {message}", path.display())]
+    Bag {
+        /// The file (or bag folder).
+        path: PathBuf,
+        /// What is wrong.
+        message: String,
+        /// The SQLite or YAML error, if any.
+        #[source]
+        source: Option<Box<dyn std::error::Error + Send + Sync>>,
     },
     /// A scan's ray count differs from the geometry of the log.
     #[error("{}:{line}: scan has {got} rays, the log's geometry has {expected}", path.display())]
@@ -135,6 +174,15 @@ pub enum LogError {
         /// The file.
         path: PathBuf,
     },
+}
+
+/// A list for messages: the items joined with commas, or `none`.
+fn list(items: &[String]) -> String {
+    if items.is_empty() {
+        "none".into()
+    } else {
+        items.join(", ")
+    }
 }
 
 impl LogError {

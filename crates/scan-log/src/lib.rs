@@ -1,6 +1,7 @@
-//! Recorded laser data: CARMEN, BreezySLAM and goalseek MCAP logs read as a
-//! [`LaserSource`](scan_types::LaserSource), and MCAP recording with the Foxglove
-//! `LaserScan` and `PoseInFrame` schemas.
+//! Recorded laser data: CARMEN, BreezySLAM and goalseek MCAP logs, ROS 2 bags (MCAP or
+//! SQLite, `sensor_msgs/msg/LaserScan`) and Foxglove MCAP files (`foxglove.LaserScan`,
+//! protobuf or JSON) read as a [`LaserSource`](scan_types::LaserSource), and MCAP recording
+//! with the Foxglove `LaserScan` and `PoseInFrame` schemas.
 //!
 //! - [`LogReader`]: every record of a log as `Result<LogRecord, LogError>`, so a malformed
 //!   line is reported (file, line, byte offset) and the rest of the log still reads.
@@ -32,10 +33,12 @@
 //! assert!(src.next_scan().unwrap_err().is_end_of_log());
 //! ```
 
+mod bag;
 mod breezy;
 mod carmen;
 mod csv;
 mod error;
+mod foreign;
 mod mcap_io;
 mod playback;
 mod record;
@@ -43,18 +46,26 @@ mod run_log;
 mod run_meta;
 mod source;
 mod text;
+mod topics;
 
+pub use bag::{BAG_METADATA, SQLITE_MAGIC, read_bag};
 pub use breezy::{
     BREEZY_HEADER_FIELDS, BREEZY_RAY_COUNT, URG_DMIN_MM, breezy_geometry, classify_mm,
 };
 pub use carmen::{CARMEN_DEFAULT_MAX_RANGE_M, flaser_geometry};
 pub use csv::{read_scan_csv, record_json, scan_json, write_scan_csv};
 pub use error::LogError;
-pub use mcap_io::{
-    EST_POSE_TOPIC, McapRecorder, MetadataRecord, SCAN_TOPIC, STATUS_HIT, STATUS_MAX_RANGE,
-    TRUE_POSE_TOPIC, parse_mcap, partial_path, read_mcap, read_mcap_metadata, recording_schemas,
+pub use foreign::{
+    FOXGLOVE_LASER_SCAN, INVALID_ABOVE_MAX, INVALID_BELOW_MIN, INVALID_NAN, ROS2_LASER_SCAN,
 };
-pub use playback::{GeometryOverride, LoopingLog, RecordedLaser, RecordedTruth, open_log};
+pub use mcap_io::{
+    EST_POSE_TOPIC, MAX_MCAP_RECORD_BYTES, McapRecorder, MetadataRecord, SCAN_TOPIC, STATUS_HIT,
+    STATUS_MAX_RANGE, TRUE_POSE_TOPIC, parse_mcap, partial_path, read_mcap, read_mcap_metadata,
+    read_mcap_topic, recording_schemas,
+};
+pub use playback::{
+    GeometryOverride, LoopingLog, RecordedLaser, RecordedTruth, open_log, open_log_topic,
+};
 pub use record::LogRecord;
 pub use run_log::{LegRecord, RunLog, trajectory_csv, tum, write_trajectory};
 pub use run_meta::{
@@ -63,3 +74,4 @@ pub use run_meta::{
 };
 pub use source::{LogFormat, LogOptions, LogReader, LogSource, open_text};
 pub use text::{TextFormat, TextLog};
+pub use topics::SUPPORTED_TOPICS;

@@ -10,6 +10,8 @@ use mcap::read::Options;
 use scan_types::{Pose2, RayStatus, Scan, ScanGeometry};
 use serde::{Deserialize, Serialize};
 
+use crate::foreign::{self, FOXGLOVE_LASER_SCAN, ROS2_LASER_SCAN};
+use crate::topics::{Decoded, Found};
 use crate::{LogError, LogRecord};
 
 /// Topic of the scans.
@@ -487,15 +489,25 @@ impl Drop for McapRecorder {
     }
 }
 
-/// Reads every scan of a goalseek MCAP recording, in order, each with its poses.
+/// Reads every scan of an MCAP file's laser topic (there must be one), in order.
 ///
 /// A damaged or cut file yields the scans before the damage, then one error.
 pub fn read_mcap(path: &Path) -> Result<Vec<Result<LogRecord, LogError>>, LogError> {
+    read_mcap_topic(path, None)
+}
+
+/// Reads every scan of the laser topic `topic` of an MCAP file (`None`: its only one), in
+/// order: a goalseek recording (each scan with its poses), ROS 2 `sensor_msgs/msg/LaserScan`
+/// in CDR, `foxglove.LaserScan` in protobuf or JSON; chunks plain, zstd or lz4.
+pub fn read_mcap_topic(
+    path: &Path,
+    topic: Option<&str>,
+) -> Result<Vec<Result<LogRecord, LogError>>, LogError> {
     let bytes = std::fs::read(path).map_err(|source| LogError::Io {
         path: path.to_path_buf(),
         source,
     })?;
-    Ok(parse_mcap(&bytes, path))
+    scan_mcap(&bytes, path).select(path, topic)
 }
 
 /// An MCAP metadata record: its name and string pairs.
@@ -531,53 +543,89 @@ pub fn read_mcap_metadata(path: &Path) -> Result<Vec<MetadataRecord>, LogError> 
     Ok(out)
 }
 
-/// Parses recording bytes (see [`read_mcap`]); `path` names the source in errors.
+/// Parses MCAP bytes (see [`read_mcap`]); `path` names the source in errors.
+///
+/// A file with several laser topics, or none, gives one error.
 pub fn parse_mcap(bytes: &[u8], path: &Path) -> Vec<Result<LogRecord, LogError>> {
-    let mut out: Vec<Result<LogRecord, LogError>> = Vec::new();
-    // Index into `out` of the record of each scan sequence number.
+    scan_mcap(bytes, path)
+        .select(path, None)
+        .unwrap_or_else(|e| vec![Err(e)])
+}
+
+/// How the messages of a channel are laser scans.
+#[derive(Clone, Copy, PartialEq)]
+enum Kind {
+    /// `foxglove.LaserScan` in JSON: goalseek's recording (exact) or plain.
+    Json,
+    /// `sensor_msgs/msg/LaserScan` in CDR.
+    Cdr,
+    /// `foxglove.LaserScan` in protobuf.
+    Protobuf,
+}
+
+/// How a channel's messages are laser scans, or `None` for another type.
+fn channel_kind(channel: &mcap::Channel<'_>) -> Option<Kind> {
+    let name = channel.schema.as_ref().map_or("", |s| s.name.as_str());
+    match (channel.message_encoding.as_str(), name) {
+        ("json", FOXGLOVE_LASER_SCAN) => Some(Kind::Json),
+        ("cdr", ROS2_LASER_SCAN) => Some(Kind::Cdr),
+        ("protobuf", FOXGLOVE_LASER_SCAN) => Some(Kind::Protobuf),
+        _ => None,
+    }
+}
+
+/// Every laser topic of MCAP bytes, decoded; goalseek's poses joined to their scans.
+pub(crate) fn scan_mcap(bytes: &[u8], path: &Path) -> Found {
+    let mut found = Found::default();
+    // Index into the entries of goalseek's scan topic of each scan sequence number.
     let mut by_seq: BTreeMap<u64, usize> = BTreeMap::new();
-    let stream = match mcap::MessageStream::new_with_options(bytes, Options::IgnoreEndMagic.into())
-    {
-        Ok(s) => s,
-        Err(source) => {
-            out.push(Err(LogError::Mcap {
-                path: path.to_path_buf(),
-                source,
-            }));
-            return out;
-        }
-    };
+    let mut kinds: BTreeMap<u16, Option<Kind>> = BTreeMap::new();
+    let stream = Messages::new(bytes);
+    let mut messages = 0usize;
     for (index, msg) in stream.enumerate() {
         let msg = match msg {
             Ok(m) => m,
             Err(source) => {
-                out.push(Err(LogError::Mcap {
+                found.tail.push(LogError::Mcap {
                     path: path.to_path_buf(),
                     source,
-                }));
+                });
                 break;
             }
         };
-        let topic = msg.channel.topic.clone();
+        messages += 1;
+        let topic = msg.channel.topic.as_str();
         let bad = |message: String| LogError::Message {
             path: path.to_path_buf(),
             index,
-            topic: topic.clone(),
+            topic: topic.to_string(),
             message,
         };
-        match topic.as_str() {
-            SCAN_TOPIC => match decode_scan(&msg.data) {
-                Ok((seq, rec)) => {
-                    by_seq.insert(seq, out.len());
-                    out.push(Ok(rec));
+        let kind = *kinds
+            .entry(msg.channel.id)
+            .or_insert_with(|| channel_kind(&msg.channel));
+        let decoded = match kind {
+            Some(Kind::Json) => match decode_json_scan(&msg.data) {
+                Ok(JsonScan::Exact((seq, rec))) if topic == SCAN_TOPIC => {
+                    by_seq.insert(seq, found.laser_topic(topic).entries.len());
+                    Ok(Decoded::Exact(rec))
                 }
-                Err(m) => out.push(Err(bad(m))),
+                Ok(JsonScan::Exact((_, rec))) => Ok(Decoded::Exact(rec)),
+                Ok(JsonScan::Foreign(s)) => Ok(Decoded::Foreign(s)),
+                Err(m) => Err(bad(m)),
             },
-            TRUE_POSE_TOPIC | EST_POSE_TOPIC => {
+            Some(Kind::Cdr) => foreign::decode_ros2_laser_scan(&msg.data)
+                .map(Decoded::Foreign)
+                .map_err(|m| bad(format!("not a CDR {ROS2_LASER_SCAN}: {m}"))),
+            Some(Kind::Protobuf) => foreign::decode_foxglove_protobuf(&msg.data)
+                .map(Decoded::Foreign)
+                .map_err(|m| bad(format!("not a protobuf {FOXGLOVE_LASER_SCAN}: {m}"))),
+            None if topic == TRUE_POSE_TOPIC || topic == EST_POSE_TOPIC => {
                 let pose: PoseMsg = match serde_json::from_slice(&msg.data) {
                     Ok(p) => p,
                     Err(e) => {
-                        out.push(Err(bad(format!("not a goalseek pose: {e}"))));
+                        let e = bad(format!("not a goalseek pose: {e}"));
+                        found.laser_topic(SCAN_TOPIC).entries.push(Err(e));
                         continue;
                     }
                 };
@@ -587,35 +635,124 @@ pub fn parse_mcap(bytes: &[u8], path: &Path) -> Vec<Result<LogRecord, LogError>>
                     y_m: g.y_m,
                     theta_rad: g.theta_rad,
                 };
-                match by_seq.get(&g.seq).and_then(|&i| out[i].as_mut().ok()) {
+                let scans = &mut found.laser_topic(SCAN_TOPIC).entries;
+                let rec = by_seq.get(&g.seq).and_then(|&i| match scans.get_mut(i) {
+                    Some(Ok(Decoded::Exact(r))) => Some(r),
+                    _ => None,
+                });
+                match rec {
                     Some(rec) if topic == TRUE_POSE_TOPIC => rec.true_pose = Some(p),
                     Some(rec) => rec.pose = Some(p),
-                    None => out.push(Err(bad(format!("pose for unknown scan {}", g.seq)))),
+                    None => scans.push(Err(bad(format!("pose for unknown scan {}", g.seq)))),
                 }
+                continue;
             }
-            _ => {} // other topics are not ours to read
-        }
+            None => {
+                let schema = msg.channel.schema.as_ref();
+                found.other_topic(format!(
+                    "{topic} ({} in {}, schema encoding {})",
+                    schema.map_or("no schema", |s| s.name.as_str()),
+                    msg.channel.message_encoding,
+                    schema.map_or("none", |s| s.encoding.as_str()),
+                ));
+                continue;
+            }
+        };
+        found.laser_topic(topic).entries.push(decoded);
     }
-    let damaged = out.last().is_some_and(Result::is_err);
-    if !damaged && !bytes.ends_with(mcap::MAGIC) {
-        let scans = out.iter().filter(|r| r.is_ok()).count();
-        out.push(Err(LogError::Message {
+    if found.tail.is_empty() && !bytes.ends_with(mcap::MAGIC) {
+        let scans: usize = found
+            .laser
+            .iter()
+            .map(|t| t.entries.iter().filter(|e| e.is_ok()).count())
+            .sum();
+        found.tail.push(LogError::Message {
             path: path.to_path_buf(),
-            index: scans,
-            topic: SCAN_TOPIC.into(),
+            index: messages,
+            topic: found
+                .laser
+                .first()
+                .map_or(SCAN_TOPIC.to_string(), |t| t.topic.clone()),
             message: format!(
                 "the file ends without its MCAP footer (a recording cut short): {scans} whole scans read, {} bytes",
                 bytes.len()
             ),
-        }));
+        });
     }
-    out
+    found
 }
 
-fn decode_scan(data: &[u8]) -> Result<(u64, LogRecord), String> {
-    let m: LaserScanMsg =
-        serde_json::from_slice(data).map_err(|e| format!("not a goalseek laser scan: {e}"))?;
-    let x = m.goalseek;
+/// The largest MCAP record (or decompressed chunk) read: a damaged length field beyond it is
+/// refused instead of allocated.
+pub const MAX_MCAP_RECORD_BYTES: usize = 64 << 20;
+
+/// The messages of MCAP bytes in file order, each record and chunk at most
+/// [`MAX_MCAP_RECORD_BYTES`] (`mcap::MessageStream` sets no limit inside chunks).
+struct Messages<'a> {
+    reader: mcap::sans_io::MessageReader,
+    rest: &'a [u8],
+}
+
+impl<'a> Messages<'a> {
+    fn new(bytes: &'a [u8]) -> Self {
+        let options = mcap::sans_io::LinearReaderOptions::default()
+            .with_skip_end_magic(true)
+            .with_record_length_limit(MAX_MCAP_RECORD_BYTES);
+        Messages {
+            reader: mcap::sans_io::MessageReader::new_with_options(options),
+            rest: bytes,
+        }
+    }
+}
+
+impl Iterator for Messages<'_> {
+    type Item = Result<mcap::Message<'static>, mcap::McapError>;
+
+    fn next(&mut self) -> Option<Self::Item> {
+        loop {
+            match self.reader.next_event()? {
+                Ok(mcap::sans_io::MessageReadEvent::ReadRequest(need)) => {
+                    let n = need.min(self.rest.len());
+                    self.reader.insert(n).copy_from_slice(&self.rest[..n]);
+                    self.reader.notify_read(n);
+                    self.rest = &self.rest[n..];
+                }
+                Ok(mcap::sans_io::MessageReadEvent::Message(m)) => return Some(Ok(m)),
+                Err(e) => return Some(Err(e)),
+            }
+        }
+    }
+}
+
+/// A JSON `foxglove.LaserScan`: goalseek's exact scan (with its sequence number) or plain.
+enum JsonScan {
+    Exact((u64, LogRecord)),
+    Foreign(foreign::ForeignScan),
+}
+
+/// The fields of a JSON laser scan goalseek's exact reading needs.
+#[derive(Deserialize)]
+struct ScanJson {
+    ranges: Vec<f64>,
+    #[serde(default)]
+    intensities: Vec<f64>,
+    goalseek: Option<ScanExtra>,
+}
+
+fn decode_json_scan(data: &[u8]) -> Result<JsonScan, String> {
+    let m: ScanJson = serde_json::from_slice(data)
+        .map_err(|e| format!("not a {FOXGLOVE_LASER_SCAN} in JSON: {e}"))?;
+    match m.goalseek {
+        Some(x) => decode_scan(m.ranges, m.intensities, x).map(JsonScan::Exact),
+        None => foreign::decode_foxglove_json(data).map(JsonScan::Foreign),
+    }
+}
+
+fn decode_scan(
+    ranges: Vec<f64>,
+    intensities: Vec<f64>,
+    x: ScanExtra,
+) -> Result<(u64, LogRecord), String> {
     let geometry = ScanGeometry::new(
         x.first_bearing_rad,
         x.increment_rad,
@@ -624,16 +761,16 @@ fn decode_scan(data: &[u8]) -> Result<(u64, LogRecord), String> {
         x.max_range_m,
     )
     .map_err(|e| e.to_string())?;
-    if m.ranges.len() != x.ray_count || x.status.len() != x.ray_count {
+    if ranges.len() != x.ray_count || x.status.len() != x.ray_count {
         return Err(format!(
             "{} ranges and {} statuses for {} rays",
-            m.ranges.len(),
+            ranges.len(),
             x.status.len(),
             x.ray_count
         ));
     }
     let mut status = Vec::with_capacity(x.ray_count);
-    let mut ranges_m = m.ranges;
+    let mut ranges_m = ranges;
     for (i, &s) in x.status.iter().enumerate() {
         status.push(match s {
             STATUS_HIT => RayStatus::Hit,
@@ -645,14 +782,14 @@ fn decode_scan(data: &[u8]) -> Result<(u64, LogRecord), String> {
             c => return Err(format!("ray {i} has unknown status {c}")),
         });
     }
-    let intensities = if m.intensities.is_empty() {
+    let intensities = if intensities.is_empty() {
         None
-    } else if m.intensities.len() == x.ray_count {
-        Some(m.intensities.iter().map(|&v| v as f32).collect())
+    } else if intensities.len() == x.ray_count {
+        Some(intensities.iter().map(|&v| v as f32).collect())
     } else {
         return Err(format!(
             "{} intensities for {} rays",
-            m.intensities.len(),
+            intensities.len(),
             x.ray_count
         ));
     };

@@ -20,7 +20,21 @@ pub struct GeometryOverride {
 
 /// Opens a log of any format as a [`LogSource`], optionally with another geometry.
 pub fn open_log(path: &Path, geometry: Option<&GeometryOverride>) -> Result<LogSource, LogError> {
-    let opened = LogSource::open(path, &LogOptions::default())?;
+    open_log_topic(path, geometry, None)
+}
+
+/// Opens a log as [`open_log`] does, reading the laser topic `topic` of a bag or MCAP file
+/// (`None`: its only one).
+pub fn open_log_topic(
+    path: &Path,
+    geometry: Option<&GeometryOverride>,
+    topic: Option<&str>,
+) -> Result<LogSource, LogError> {
+    let base = LogOptions {
+        topic: topic.map(str::to_string),
+        ..LogOptions::default()
+    };
+    let opened = LogSource::open(path, &base)?;
     let Some(o) = geometry else {
         return Ok(opened);
     };
@@ -44,10 +58,7 @@ pub fn open_log(path: &Path, geometry: Option<&GeometryOverride>) -> Result<LogS
         p.min_range_m,
         p.max_range_m,
     )?);
-    let options = LogOptions {
-        geometry,
-        ..LogOptions::default()
-    };
+    let options = LogOptions { geometry, ..base };
     LogSource::open(path, &options)
 }
 
@@ -56,6 +67,7 @@ pub fn open_log(path: &Path, geometry: Option<&GeometryOverride>) -> Result<LogS
 pub struct LoopingLog {
     path: PathBuf,
     sensor: Option<String>,
+    topic: Option<String>,
     source: LogSource,
     laps: usize,
 }
@@ -63,10 +75,20 @@ pub struct LoopingLog {
 impl LoopingLog {
     /// Opens `path` (see [`open_log`]).
     pub fn open(path: &Path, geometry: Option<&GeometryOverride>) -> Result<LoopingLog, LogError> {
+        Self::open_topic(path, geometry, None)
+    }
+
+    /// Opens the laser topic `topic` of `path` (see [`open_log_topic`]).
+    pub fn open_topic(
+        path: &Path,
+        geometry: Option<&GeometryOverride>,
+        topic: Option<&str>,
+    ) -> Result<LoopingLog, LogError> {
         Ok(LoopingLog {
             path: path.to_path_buf(),
             sensor: geometry.map(|o| o.name.clone()),
-            source: open_log(path, geometry)?,
+            topic: topic.map(str::to_string),
+            source: open_log_topic(path, geometry, topic)?,
             laps: 0,
         })
     }
@@ -89,6 +111,7 @@ impl LaserSource for LoopingLog {
             Err(e) if e.is_end_of_log() && self.source.scans_read() > 0 => {
                 let options = LogOptions {
                     geometry: Some(*self.source.geometry()),
+                    topic: self.topic.clone(),
                     ..LogOptions::default()
                 };
                 self.source = LogSource::open(&self.path, &options)?;

@@ -18,13 +18,29 @@ pub enum LogFormat {
     Carmen,
     /// BreezySLAM `.dat` (URG-04LX, millimetres), plain or gzip.
     Breezy,
-    /// goalseek's MCAP recording.
+    /// An MCAP file: a goalseek recording, a ROS 2 bag (`sensor_msgs/msg/LaserScan` in CDR)
+    /// or Foxglove `foxglove.LaserScan` (protobuf or JSON); chunks plain, zstd or lz4.
     Mcap,
+    /// A rosbag2 bag: a SQLite `.db3` file, or a bag folder (`metadata.yaml` with `.db3` or
+    /// `.mcap` files).
+    Bag,
 }
 
 impl LogFormat {
-    /// The format of `path`, from its name, else from its first bytes.
+    /// The format of `path`: a folder is a rosbag2 bag; a file starting with the MCAP or
+    /// SQLite magic bytes is MCAP or a rosbag2 `.db3`; else by its name (`.mcap`, `.dat`,
+    /// `.log`, `.clf`, also gzipped), else by its first line.
     pub fn detect(path: &Path) -> Result<LogFormat, LogError> {
+        if path.is_dir() {
+            return Ok(LogFormat::Bag);
+        }
+        let head = read_head(path)?;
+        if head.starts_with(mcap::MAGIC) {
+            return Ok(LogFormat::Mcap);
+        }
+        if &head == crate::bag::SQLITE_MAGIC {
+            return Ok(LogFormat::Bag);
+        }
         let name = path
             .file_name()
             .map(|n| n.to_string_lossy().to_lowercase())
@@ -40,7 +56,7 @@ impl LogFormat {
         if name.ends_with(".log") || name.ends_with(".clf") {
             return Ok(LogFormat::Carmen);
         }
-        // Sniff: MCAP magic, else the first word of the first non-comment line.
+        // Sniff: the first word of the first non-comment line.
         let mut head = Vec::new();
         let mut r = open_text(path)?;
         r.by_ref()
@@ -50,9 +66,6 @@ impl LogFormat {
                 path: path.to_path_buf(),
                 source,
             })?;
-        if head.starts_with(b"\x89MCAP") {
-            return Ok(LogFormat::Mcap);
-        }
         let text = String::from_utf8_lossy(&head);
         let first = text
             .lines()
@@ -81,6 +94,26 @@ pub struct LogOptions {
     pub geometry: Option<ScanGeometry>,
     /// CARMEN readings at or beyond this are "no return"; `None` is 50 m.
     pub carmen_max_range_m: Option<f64>,
+    /// The laser topic to read from a bag or MCAP file holding several (`--topic`).
+    pub topic: Option<String>,
+}
+
+/// The first 16 bytes of a file (fewer if it is shorter, the rest zero).
+pub(crate) fn read_head(path: &Path) -> Result<[u8; 16], LogError> {
+    let io = |source| LogError::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    let mut head = [0u8; 16];
+    let mut file = File::open(path).map_err(io)?;
+    let mut n = 0;
+    while n < head.len() {
+        match file.read(&mut head[n..]).map_err(io)? {
+            0 => break,
+            k => n += k,
+        }
+    }
+    Ok(head)
 }
 
 /// Opens a file for reading text, decompressing gzip (detected by its magic bytes).
@@ -137,7 +170,12 @@ impl LogReader {
                     max,
                 ))
             }
-            LogFormat::Mcap => Inner::Mcap(mcap_io::read_mcap(path)?.into_iter()),
+            LogFormat::Mcap => {
+                Inner::Mcap(mcap_io::read_mcap_topic(path, options.topic.as_deref())?.into_iter())
+            }
+            LogFormat::Bag => {
+                Inner::Mcap(crate::bag::read_bag(path, options.topic.as_deref())?.into_iter())
+            }
         };
         Ok(LogReader {
             path: path.to_path_buf(),

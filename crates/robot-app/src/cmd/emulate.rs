@@ -34,9 +34,12 @@ pub struct EmulateArgs {
     /// Do not stop at end of standard input; serve until killed (for background use).
     #[arg(long)]
     pub no_stdin: bool,
-    /// Take ranges from a recorded log (CARMEN, BreezySLAM, goalseek MCAP), looping at its end.
+    /// Take ranges from a recorded log (CARMEN, BreezySLAM, MCAP, rosbag2), looping at its end.
     #[arg(long, conflicts_with = "sim")]
     pub source: Option<PathBuf>,
+    /// With --source: the laser topic to read when a bag or MCAP file holds several.
+    #[arg(long, value_name = "NAME", requires = "source")]
+    pub topic: Option<String>,
 }
 
 /// Starts the emulator described by `args` (the caller keeps it alive).
@@ -44,7 +47,7 @@ pub fn start(args: &EmulateArgs) -> anyhow::Result<PtyServer> {
     let mut profile = Profile::of(args.model);
     profile.scip1_at_power_up = args.scip1;
     let server = if let Some(log) = &args.source {
-        let source = scan_log::LoopingLog::open(log, None)
+        let source = scan_log::LoopingLog::open_topic(log, None, args.topic.as_deref())
             .with_context(|| format!("opening the log {}", log.display()))?;
         serve_pty(profile, source)
     } else if args.sim {

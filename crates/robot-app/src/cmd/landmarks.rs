@@ -16,7 +16,8 @@ use scan_types::LaserSource;
 /// Arguments of `robot-app landmarks`.
 #[derive(Debug, Args)]
 pub struct LandmarksArgs {
-    /// The log: CARMEN .log/.log.gz, BreezySLAM .dat, or a goalseek .mcap recording.
+    /// The log: CARMEN .log/.log.gz, BreezySLAM .dat, an MCAP file (goalseek, ROS 2,
+    /// Foxglove) or a rosbag2 bag (.db3 file or bag folder).
     #[arg(long)]
     pub log: PathBuf,
     /// Detection rules: paper (max-range jumps, n = 1, nothing rejected) or goalseek.
@@ -31,6 +32,9 @@ pub struct LandmarksArgs {
     /// Sensor preset whose geometry replaces the log's: paper, urg-04lx, utm-30lx.
     #[arg(long)]
     pub sensor: Option<String>,
+    /// The laser topic to read when a bag or MCAP file holds several (e.g. /scan).
+    #[arg(long, value_name = "NAME")]
+    pub topic: Option<String>,
     /// Print one CSV row per scan before the totals.
     #[arg(long)]
     pub per_scan: bool,
@@ -38,7 +42,8 @@ pub struct LandmarksArgs {
 
 /// Runs `robot-app landmarks`.
 pub fn run(args: LandmarksArgs) -> anyhow::Result<()> {
-    let mut source = crate::record::open_log(&args.log, args.sensor.as_deref())?;
+    let mut source =
+        crate::record::open_log_topic(&args.log, args.sensor.as_deref(), args.topic.as_deref())?;
     let geometry = *source.geometry();
     let (detect_params, mut track) = if args.params == "paper" {
         (DetectParams::paper(), TrackParams::paper())

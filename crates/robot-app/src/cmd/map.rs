@@ -16,6 +16,9 @@ pub struct MapArgs {
     /// The log (with poses): CARMEN .log/.log.gz or a goalseek .mcap recording.
     #[arg(long)]
     pub log: PathBuf,
+    /// The laser topic to read when a bag or MCAP file holds several (e.g. /scan).
+    #[arg(long, value_name = "NAME")]
+    pub topic: Option<String>,
     /// Cell side, metres.
     #[arg(long, default_value_t = 0.05)]
     pub resolution: f64,
@@ -42,7 +45,7 @@ pub struct MapArgs {
 /// Runs `robot-app map`.
 pub fn run(args: MapArgs) -> anyhow::Result<()> {
     super::check_map_options(args.resolution, args.max_range)?;
-    let mut source = crate::record::open_log(&args.log, None)?;
+    let mut source = crate::record::open_log_topic(&args.log, None, args.topic.as_deref())?;
     let mut geometry = *source.geometry();
     if let Some(deg) = args.spread_deg {
         geometry = ScanGeometry::centred(

@@ -14,7 +14,8 @@ use crate::cmd::scan::ScanFormat;
 /// Arguments of `robot-app replay`.
 #[derive(Debug, Args)]
 pub struct ReplayArgs {
-    /// The log: CARMEN .log/.log.gz, BreezySLAM .dat, or a goalseek .mcap recording.
+    /// The log: CARMEN .log/.log.gz, BreezySLAM .dat, an MCAP file (goalseek, ROS 2,
+    /// Foxglove) or a rosbag2 bag (.db3 file or bag folder).
     pub file: PathBuf,
     /// Playback speed relative to the log's time stamps (2 = twice as fast, 0 = no waiting);
     /// a number >= 0.
@@ -23,6 +24,9 @@ pub struct ReplayArgs {
     /// Sensor preset whose geometry replaces the log's: paper, urg-04lx, utm-30lx.
     #[arg(long)]
     pub sensor: Option<String>,
+    /// The laser topic to read when a bag or MCAP file holds several (e.g. /scan).
+    #[arg(long, value_name = "NAME")]
+    pub topic: Option<String>,
     /// Print at most this many scans, at least 1 (default: the whole log).
     #[arg(long, value_parser = super::positive_count)]
     pub count: Option<usize>,
@@ -53,7 +57,8 @@ pub fn run_to<W: Write>(args: &ReplayArgs, out: &mut W) -> anyhow::Result<()> {
     if args.through_loop {
         return run_loop(args, out);
     }
-    let mut source = crate::record::open_log(&args.file, args.sensor.as_deref())?;
+    let mut source =
+        crate::record::open_log_topic(&args.file, args.sensor.as_deref(), args.topic.as_deref())?;
     let geometry = *source.geometry();
     let mut recorder = match &args.record {
         Some(p) => Some(crate::record::Recorder::create(p, &geometry)?),

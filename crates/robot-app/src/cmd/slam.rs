@@ -20,9 +20,13 @@ use scan_log::tum;
 /// Arguments of `robot-app slam`.
 #[derive(Debug, Args)]
 pub struct SlamArgs {
-    /// The log: CARMEN (.log, .log.gz), BreezySLAM .dat or a goalseek .mcap recording.
+    /// The log: CARMEN (.log, .log.gz), BreezySLAM .dat, an MCAP file (goalseek, ROS 2,
+    /// Foxglove) or a rosbag2 bag (.db3 file or bag folder).
     #[arg(long)]
     pub log: PathBuf,
+    /// The laser topic to read when a bag or MCAP file holds several (e.g. /scan).
+    #[arg(long, value_name = "NAME")]
+    pub topic: Option<String>,
     /// Output folder (created if missing).
     #[arg(long, default_value = "goalseek-slam")]
     pub out: PathBuf,
@@ -106,7 +110,21 @@ pub fn run_log(
     params: &FrontEndParams,
     loops: Option<&LoopParams>,
 ) -> anyhow::Result<SlamRun> {
-    let mut source = LogSource::open(path, &LogOptions::default())
+    run_log_topic(path, None, params, loops)
+}
+
+/// [`run_log`] over the laser topic `topic` of `path` (`None`: the log's only one).
+pub fn run_log_topic(
+    path: &Path,
+    topic: Option<&str>,
+    params: &FrontEndParams,
+    loops: Option<&LoopParams>,
+) -> anyhow::Result<SlamRun> {
+    let options = LogOptions {
+        topic: topic.map(str::to_string),
+        ..LogOptions::default()
+    };
+    let mut source = LogSource::open(path, &options)
         .with_context(|| format!("opening the log {}", path.display()))?;
     let name = path.display().to_string();
     let mut progress = Progress::new();
@@ -163,7 +181,7 @@ pub fn run(args: SlamArgs) -> anyhow::Result<()> {
     super::check_map_options(args.resolution, args.max_range)?;
     let (params, loops) = load_params(args.config.as_deref())?;
     let loops = (!args.no_loop_closure).then_some(&loops);
-    let mut run = run_log(&args.log, &params, loops)?;
+    let mut run = run_log_topic(&args.log, args.topic.as_deref(), &params, loops)?;
     write_outputs(&args.out, &mut run, args.resolution, args.max_range)?;
     let r = &run.report;
     let closures = r.loop_closure.as_ref().map_or(String::new(), |l| {
