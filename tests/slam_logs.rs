@@ -232,3 +232,66 @@ fn figures_agree_with_evo() {
         );
     }
 }
+
+/// The pose of `b` in the frame of `a`.
+fn relative(a: &scan_types::Pose2, b: &scan_types::Pose2) -> scan_types::Pose2 {
+    a.inverse().compose(b)
+}
+
+/// Loop closure against the front end alone on the Intel log: the aligned trajectory error
+/// falls to a quarter or less and the map's walls line up better.
+#[test]
+fn loop_closure_corrects_the_intel_drift() {
+    let Some(p) = shared("carmen/intel-corrected.log.gz") else {
+        return;
+    };
+    let (front, loops) = load_params(None).unwrap();
+    let mut closed = run_log(&p, &front, Some(&loops)).unwrap();
+    let mut alone = run_log(&p, &front, None).unwrap();
+    closed.map(0.05, 20.0);
+    alone.map(0.05, 20.0);
+    let ate = |r: &SlamRun| r.report.evaluation.as_ref().unwrap().absolute_m.rmse;
+    let l = closed.report.loop_closure.as_ref().unwrap();
+    println!(
+        "intel: ATE {:.3} m with loop closure, {:.3} m without; consistency {:.3} / {:.3}; {} closures accepted, {} rejected",
+        ate(&closed),
+        ate(&alone),
+        closed.report.map_consistency,
+        alone.report.map_consistency,
+        l.accepted,
+        l.rejected
+    );
+    assert!(alone.report.loop_closure.is_none());
+    assert!(l.accepted > 0);
+    assert!(
+        ate(&closed) <= 0.25 * ate(&alone),
+        "{} {}",
+        ate(&closed),
+        ate(&alone)
+    );
+    assert!(closed.report.map_consistency > alone.report.map_consistency);
+}
+
+/// The bar for false closures on the ACES log: every accepted closure's measured
+/// relative pose lies within 0.2 m and 2 deg of the reference poses' relative pose.
+#[test]
+fn aces_closures_agree_with_the_reference_poses() {
+    let Some(p) = shared("carmen/aces-corrected.log.gz") else {
+        return;
+    };
+    let run = slam(&p);
+    let l = run.report.loop_closure.as_ref().unwrap();
+    assert!(l.accepted > 0, "{l:?}");
+    for c in l.closures.iter().filter(|c| c.accepted) {
+        let (a, b) = (&run.placed[c.from], &run.placed[c.to]);
+        let want = relative(&a.reference.unwrap(), &b.reference.unwrap());
+        let got = scan_types::Pose2::new(c.measured[0], c.measured[1], c.measured[2]);
+        let e = relative(&want, &got);
+        assert!(
+            e.x_m.hypot(e.y_m) <= 0.2 && e.theta_rad.abs() <= 2f64.to_radians(),
+            "closure {} -> {}: measured {got:?}, reference {want:?}",
+            c.from,
+            c.to
+        );
+    }
+}

@@ -1,10 +1,11 @@
 //! A 2D pose graph and its optimisation: Gauss-Newton over every pose at once, the normal
-//! equations solved by a sparse Cholesky factorisation (nalgebra-sparse), and a Cauchy loss on
-//! the edges marked robust, so that a wrong loop closure is weighed down instead of tearing the
-//! map.
+//! equations solved by faer's sparse Cholesky factorisation (with its fill-reducing
+//! ordering), and a Cauchy loss on the edges marked robust, so that a wrong loop closure is
+//! weighed down instead of tearing the map.
 
-use nalgebra::DVector;
-use nalgebra_sparse::{CooMatrix, CscMatrix, factorization::CscCholesky};
+use faer::linalg::solvers::Solve;
+use faer::sparse::{SparseColMat, Triplet};
+use faer::{Mat, Side};
 use scan_types::{Pose2, normalize_angle_rad};
 
 use crate::SlamError;
@@ -162,14 +163,14 @@ impl PoseGraph {
     }
 
     /// One Gauss-Newton step for nodes 1.. (node 0 fixed): solves H dx = -g.
-    fn step(&self, params: &OptimiseParams) -> Result<DVector<f64>, SlamError> {
+    fn step(&self, params: &OptimiseParams) -> Result<Vec<f64>, SlamError> {
         let dim = 3 * (self.nodes.len() - 1);
-        let mut h = CooMatrix::new(dim, dim);
-        let mut g = DVector::<f64>::zeros(dim);
+        // The lower triangle of H (faer sums repeated entries).
+        let mut h: Vec<Triplet<usize, usize, f64>> =
+            Vec::with_capacity(dim + 36 * self.edges.len());
+        let mut g = vec![0.0f64; dim];
         // A small damping keeps H positive definite for nodes no edge reaches.
-        for k in 0..dim {
-            h.push(k, k, 1e-9);
-        }
+        h.extend((0..dim).map(|k| Triplet::new(k, k, 1e-9)));
         for edge in &self.edges {
             let (xi, xj) = (&self.nodes[edge.from], &self.nodes[edge.to]);
             let e = error(xi, xj, &edge.measured);
@@ -186,7 +187,7 @@ impl PoseGraph {
                     continue;
                 }
                 let oi = 3 * (ni - 1);
-                for (r, gr) in g.rows_mut(oi, 3).iter_mut().enumerate() {
+                for (r, gr) in g[oi..oi + 3].iter_mut().enumerate() {
                     *gr += (0..3).map(|k| ji[k][r] * info[k] * e[k]).sum::<f64>();
                 }
                 for &(nj, jj) in &blocks {
@@ -196,18 +197,22 @@ impl PoseGraph {
                     let oj = 3 * (nj - 1);
                     for (r, row) in weighted_product(ji, &info, jj).iter().enumerate() {
                         for (c, &v) in row.iter().enumerate() {
-                            if v != 0.0 {
-                                h.push(oi + r, oj + c, v);
+                            if v != 0.0 && oi + r >= oj + c {
+                                h.push(Triplet::new(oi + r, oj + c, v));
                             }
                         }
                     }
                 }
             }
         }
-        let h = CscMatrix::from(&h);
-        let chol = CscCholesky::factor(&h).map_err(|_| SlamError::SingularGraph)?;
-        let dx = chol.solve(&(-g));
-        let dx = DVector::from_column_slice(dx.as_slice());
+        let h = SparseColMat::<usize, f64>::try_new_from_triplets(dim, dim, &h)
+            .map_err(|_| SlamError::SingularGraph)?;
+        let llt = h
+            .sp_cholesky(Side::Lower)
+            .map_err(|_| SlamError::SingularGraph)?;
+        let mut dx = Mat::<f64>::from_fn(dim, 1, |i, _| -g[i]);
+        llt.solve_in_place(dx.as_mut());
+        let dx: Vec<f64> = (0..dim).map(|i| dx[(i, 0)]).collect();
         if dx.iter().all(|v| v.is_finite()) {
             Ok(dx)
         } else {

@@ -66,14 +66,14 @@ impl Default for LoopParams {
             angular_window_deg: 25.0,
             min_quality: 0.6,
             odometry_sigma_m: 0.01,
-            odometry_sigma_per_m: 0.05,
+            odometry_sigma_per_m: 0.02,
             odometry_sigma_deg: 0.2,
             odometry_sigma_per_rad: 0.02,
             reoptimise_sigmas: 3.0,
-            closure_sigma_m: 0.05,
-            closure_sigma_deg: 1.0,
+            closure_sigma_m: 0.1,
+            closure_sigma_deg: 2.0,
             cauchy_scale: 1.0,
-            reject_weight: 0.1,
+            reject_weight: 0.3,
         }
     }
 }
@@ -151,6 +151,9 @@ pub struct Closure {
     pub to: usize,
     /// The match's field score.
     pub quality: f64,
+    /// The measured pose of the newer scan in the frame of the older: x, y (metres), heading
+    /// (radians).
+    pub measured: [f64; 3],
     /// Kept by the optimised graph.
     pub accepted: bool,
 }
@@ -228,10 +231,11 @@ pub fn close_loops(
             ) else {
                 continue;
             };
+            let measured = graph.nodes[j].inverse().compose(&pose);
             let edge = Edge {
                 from: j,
                 to: m,
-                measured: graph.nodes[j].inverse().compose(&pose),
+                measured,
                 sigma: [
                     params.closure_sigma_m,
                     params.closure_sigma_m,
@@ -247,6 +251,7 @@ pub fn close_loops(
                 from: j * every,
                 to: i,
                 quality,
+                measured: [measured.x_m, measured.y_m, measured.theta_rad],
                 accepted: true,
             });
         }
