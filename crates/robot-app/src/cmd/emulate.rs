@@ -10,7 +10,7 @@ use urg_driver::{FixedSource, Model, Profile, PtyServer, serve_pty};
 /// Arguments of `robot-app emulate`.
 #[derive(Debug, Args)]
 pub struct EmulateArgs {
-    /// Sensor model: urg-04lx or utm-30lx.
+    /// Sensor model: urg-04lx, utm-30lx or ust-10lx.
     #[arg(long, default_value = "urg-04lx", value_parser = str::parse::<Model>)]
     pub model: Model,
     /// Start in SCIP 1.1, as a factory URG-04LX does (clients must send SCIP2.0).
