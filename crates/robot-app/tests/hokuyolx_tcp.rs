@@ -75,6 +75,7 @@ fn ints(v: &serde_json::Value) -> Vec<u64> {
 }
 
 #[test]
+#[allow(clippy::print_stderr)] // the skip notice goes to the terminal
 fn hokuyolx_reads_the_emulated_ust_10lx_over_tcp() {
     if !hokuyolx_available() {
         assert!(

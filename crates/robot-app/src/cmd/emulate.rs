@@ -116,7 +116,7 @@ fn serve<S: LaserSource + Send + 'static>(
 pub fn start(args: &EmulateArgs) -> anyhow::Result<Served> {
     let mut profile = Profile::of(args.model);
     profile.scip1_at_power_up = args.scip1;
-    let server = if let Some(log) = &args.source {
+    if let Some(log) = &args.source {
         let source = scan_log::LoopingLog::open_topic(log, None, args.topic.as_deref())
             .with_context(|| format!("opening the log {}", log.display()))?;
         serve(profile, source, args.tcp)
@@ -136,8 +136,7 @@ pub fn start(args: &EmulateArgs) -> anyhow::Result<Served> {
     } else {
         let source = FixedSource::room(profile.params.geometry());
         serve(profile, source, args.tcp)
-    };
-    server
+    }
 }
 
 /// What the emulator described by `args` serves, for its announcement.
