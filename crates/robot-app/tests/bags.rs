@@ -83,11 +83,12 @@ fn the_emulator_serves_a_bag_topic() {
         no_stdin: true,
         source: Some(fixture("ros2_mcap")),
         topic: Some("/scan_rear".into()),
+        tcp: None,
     })
     .unwrap();
     let mut out = Vec::new();
     let args = ScanArgs {
-        port: Some(server.path().into()),
+        port: Some(server.location()),
         count: 1,
         format: ScanFormat::Csv,
         stream: false,

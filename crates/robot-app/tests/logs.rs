@@ -119,11 +119,12 @@ fn emulate_source_serves_a_recording_over_scip() {
         no_stdin: true,
         source: Some(path),
         topic: None,
+        tcp: None,
     })
     .unwrap();
     let mut out = Vec::new();
     let args = ScanArgs {
-        port: Some(server.path().into()),
+        port: Some(server.location()),
         count: 2, // the one-scan log loops
         format: ScanFormat::Csv,
         stream: false,

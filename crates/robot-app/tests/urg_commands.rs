@@ -105,11 +105,12 @@ fn scan_sim_and_emulate_sim_agree() {
         no_stdin: true,
         source: None,
         topic: None,
+        tcp: None,
     })
     .unwrap();
     let mut out = Vec::new();
     scan::run_to(
-        &scan_args(Some(server.path().into()), ScanFormat::Csv, 1),
+        &scan_args(Some(server.location()), ScanFormat::Csv, 1),
         &mut out,
     )
     .unwrap();

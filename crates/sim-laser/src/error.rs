@@ -55,7 +55,7 @@ pub enum SimError {
         value: f64,
     },
     /// An unknown sensor preset name.
-    #[error("unknown sensor preset {0:?} (expected paper, urg-04lx or utm-30lx)")]
+    #[error("unknown sensor preset {0:?} (expected paper, urg-04lx, utm-30lx or ust-10lx)")]
     UnknownPreset(String),
     /// A start or target the robot cannot have in this world.
     #[error("impossible scenario in world {world}: the {what} {message}")]

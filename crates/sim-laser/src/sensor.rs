@@ -24,11 +24,14 @@ pub enum SensorPreset {
     Urg04lx,
     /// Hokuyo UTM-30LX: 1081 rays over 270 deg, 0.1..30 m.
     Utm30lx,
+    /// Hokuyo UST-10LX: 1081 rays over 270 deg, 0.02..30 m as its PP reports (UST-10LX data
+    /// sheet: 0.06 to 10 m guaranteed, 30 m the largest distance reported).
+    Ust10lx,
 }
 
 impl SensorPreset {
     /// All presets, in their documented order.
-    pub const ALL: [SensorPreset; 3] = [Self::Paper, Self::Urg04lx, Self::Utm30lx];
+    pub const ALL: [SensorPreset; 4] = [Self::Paper, Self::Urg04lx, Self::Utm30lx, Self::Ust10lx];
 
     /// The preset's scan geometry.
     ///
@@ -49,6 +52,11 @@ impl SensorPreset {
             Self::Utm30lx => {
                 let inc = 2.0 * PI / 1440.0;
                 ScanGeometry::new((0.0 - 540.0) * inc, inc, 1081, 0.1, 30.0)
+                    .expect("constant geometry")
+            }
+            Self::Ust10lx => {
+                let inc = 2.0 * PI / 1440.0;
+                ScanGeometry::new((0.0 - 540.0) * inc, inc, 1081, 0.02, 30.0)
                     .expect("constant geometry")
             }
         }
@@ -72,6 +80,8 @@ impl SensorPreset {
                 combine: SigmaCombine::Max,
                 ..LaserNoise::off()
             },
+            // UST-10LX data sheet: accuracy +-40 mm; a constant sigma of 40 mm.
+            Self::Ust10lx => LaserNoise::gaussian(0.04),
         }
     }
 
@@ -79,7 +89,7 @@ impl SensorPreset {
     pub fn scan_period_s(&self) -> f64 {
         match self {
             Self::Paper | Self::Urg04lx => 0.1,
-            Self::Utm30lx => 0.025,
+            Self::Utm30lx | Self::Ust10lx => 0.025,
         }
     }
 
@@ -89,6 +99,7 @@ impl SensorPreset {
             Self::Paper => "paper",
             Self::Urg04lx => "urg-04lx",
             Self::Utm30lx => "utm-30lx",
+            Self::Ust10lx => "ust-10lx",
         }
     }
 }
@@ -112,6 +123,7 @@ impl FromStr for SensorPreset {
             "paper" => Ok(Self::Paper),
             "urg-04lx" | "urg04lx" | "urg" => Ok(Self::Urg04lx),
             "utm-30lx" | "utm30lx" | "utm" => Ok(Self::Utm30lx),
+            "ust-10lx" | "ust10lx" | "ust" => Ok(Self::Ust10lx),
             _ => Err(SimError::UnknownPreset(s.to_string())),
         }
     }

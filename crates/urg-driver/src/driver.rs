@@ -499,21 +499,185 @@ impl SerialUrg {
 impl Urg<SerialTransport> {
     /// Opens the serial device at `path` and connects.
     pub fn open(path: &str, config: UrgConfig) -> Result<Self, UrgError> {
-        let io = open_serial(path).map_err(|e| {
-            if e.kind() == io::ErrorKind::NotFound {
-                UrgError::NoSuchPort {
-                    path: path.to_string(),
-                    why: e.to_string(),
-                }
-            } else if crate::port::is_disconnect(&e) {
-                UrgError::Disconnected(format!("cannot open {path}: {e}"))
-            } else {
-                UrgError::Io(std::io::Error::new(
-                    e.kind(),
-                    format!("cannot open {path}: {e}"),
-                ))
+        let io = open_serial(path).map_err(|e| open_error(path, e))?;
+        Urg::connect(io, config)
+    }
+}
+
+/// The prefix of a port that names a TCP address (`tcp:HOST:PORT`) rather than a serial device.
+pub const TCP_PREFIX: &str = "tcp:";
+
+/// The TCP port Ethernet Hokuyos (UST-10LX/20LX, UTM-30LX-EW) serve SCIP 2.0 on.
+pub const SCIP_TCP_PORT: u16 = 10940;
+
+/// How long opening a TCP connection may take before it fails.
+const TCP_CONNECT_TIMEOUT: Duration = Duration::from_secs(2);
+
+/// Where a sensor is reached: a serial device path, or `tcp:HOST:PORT` for an Ethernet model.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum PortSpec {
+    /// A serial device (USB CDC-ACM or pseudo-terminal) at this path.
+    Serial(String),
+    /// A TCP address, `HOST:PORT`.
+    Tcp(String),
+}
+
+impl PortSpec {
+    /// Reads a `--port` value: `tcp:HOST:PORT` is a TCP address, anything else a device path.
+    ///
+    /// A TCP address needs a host and a numeric port (`tcp:192.168.0.10:10940`,
+    /// `tcp:[::1]:10940`); otherwise the error names the value and what is missing.
+    pub fn parse(port: &str) -> Result<Self, UrgError> {
+        let Some(addr) = port.strip_prefix(TCP_PREFIX) else {
+            return Ok(PortSpec::Serial(port.to_string()));
+        };
+        let bad = |why: &str| UrgError::BadPort {
+            port: port.to_string(),
+            why: format!("{why}; expected tcp:HOST:PORT, e.g. tcp:192.168.0.10:{SCIP_TCP_PORT}"),
+        };
+        let Some((host, number)) = addr.rsplit_once(':') else {
+            return Err(bad("no port number"));
+        };
+        if host.is_empty() || host == "[]" {
+            return Err(bad("no host"));
+        }
+        match number.parse::<u16>() {
+            Ok(n) if n > 0 => Ok(PortSpec::Tcp(addr.to_string())),
+            _ => Err(bad(&format!("port number {number:?} is not 1..65535"))),
+        }
+    }
+}
+
+impl std::fmt::Display for PortSpec {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            PortSpec::Serial(path) => f.write_str(path),
+            PortSpec::Tcp(addr) => write!(f, "{TCP_PREFIX}{addr}"),
+        }
+    }
+}
+
+/// Connects to a sensor's TCP address (`HOST:PORT`), trying each address it resolves to,
+/// with a short read timeout so that the driver's own timeouts rule.
+pub fn open_tcp(addr: &str) -> io::Result<std::net::TcpStream> {
+    use std::net::ToSocketAddrs;
+    let mut last = None;
+    for a in addr.to_socket_addrs()? {
+        match std::net::TcpStream::connect_timeout(&a, TCP_CONNECT_TIMEOUT) {
+            Ok(stream) => {
+                stream.set_read_timeout(Some(Duration::from_millis(20)))?;
+                stream.set_write_timeout(Some(Duration::from_secs(2)))?;
+                stream.set_nodelay(true)?;
+                return Ok(stream);
             }
+            Err(e) => last = Some(e),
+        }
+    }
+    Err(last.unwrap_or_else(|| {
+        io::Error::new(
+            io::ErrorKind::NotFound,
+            format!("{addr} resolves to no address"),
+        )
+    }))
+}
+
+/// A connection to a sensor: a serial device or a TCP socket.
+pub enum PortTransport {
+    /// A serial device.
+    Serial(SerialTransport),
+    /// A TCP connection to an Ethernet sensor.
+    Tcp(std::net::TcpStream),
+}
+
+impl std::fmt::Debug for PortTransport {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            PortTransport::Serial(p) => write!(f, "Serial({:?})", p.name()),
+            PortTransport::Tcp(s) => write!(f, "Tcp({:?})", s.peer_addr().ok()),
+        }
+    }
+}
+
+impl Read for PortTransport {
+    fn read(&mut self, buf: &mut [u8]) -> io::Result<usize> {
+        match self {
+            PortTransport::Serial(p) => p.read(buf),
+            PortTransport::Tcp(s) => s.read(buf),
+        }
+    }
+}
+
+impl Write for PortTransport {
+    fn write(&mut self, buf: &[u8]) -> io::Result<usize> {
+        match self {
+            PortTransport::Serial(p) => p.write(buf),
+            PortTransport::Tcp(s) => s.write(buf),
+        }
+    }
+
+    fn flush(&mut self) -> io::Result<()> {
+        match self {
+            PortTransport::Serial(p) => p.flush(),
+            PortTransport::Tcp(s) => s.flush(),
+        }
+    }
+}
+
+/// Opens the transport `spec` names (a serial device or a TCP connection).
+pub fn open_port(spec: &PortSpec) -> io::Result<PortTransport> {
+    match spec {
+        PortSpec::Serial(path) => open_serial(path).map(PortTransport::Serial),
+        PortSpec::Tcp(addr) => open_tcp(addr).map(PortTransport::Tcp),
+    }
+}
+
+/// How a [`PortUrg`] reopens its serial device or TCP connection.
+pub type PortOpener = Box<dyn FnMut() -> io::Result<PortTransport> + Send>;
+
+/// A sensor on a serial device or over TCP that survives disconnection: after an unplug or
+/// a dropped connection it reconnects to the same path or `HOST:PORT` and checks it is the
+/// same sensor.
+pub type PortUrg = ReconnectingUrg<PortTransport, PortOpener>;
+
+impl PortUrg {
+    /// Opens `port` (a device path or `tcp:HOST:PORT`) and connects, failing at once if
+    /// nothing is there, then reconnects to the same place with `backoff` whenever the
+    /// sensor goes away.
+    pub fn open_port(port: &str, config: UrgConfig, backoff: Backoff) -> Result<Self, UrgError> {
+        let spec = PortSpec::parse(port)?;
+        let urg = Urg::open_spec(&spec, config)?;
+        let open: PortOpener = Box::new(move || open_port(&spec));
+        Ok(Self::from_connected(urg, open, config, backoff))
+    }
+}
+
+impl Urg<PortTransport> {
+    /// Opens `spec` (a serial device or a TCP address) and connects.
+    pub fn open_spec(spec: &PortSpec, config: UrgConfig) -> Result<Self, UrgError> {
+        let io = open_port(spec).map_err(|e| match spec {
+            PortSpec::Serial(path) => open_error(path, e),
+            PortSpec::Tcp(addr) => UrgError::NoSuchAddress {
+                addr: addr.clone(),
+                why: e.to_string(),
+            },
         })?;
         Urg::connect(io, config)
+    }
+}
+
+/// The error of a serial device that cannot be opened: a missing one is `NoSuchPort`.
+fn open_error(path: &str, e: io::Error) -> UrgError {
+    if e.kind() == io::ErrorKind::NotFound {
+        UrgError::NoSuchPort {
+            path: path.to_string(),
+            why: e.to_string(),
+        }
+    } else if crate::port::is_disconnect(&e) {
+        UrgError::Disconnected(format!("cannot open {path}: {e}"))
+    } else {
+        UrgError::Io(std::io::Error::new(
+            e.kind(),
+            format!("cannot open {path}: {e}"),
+        ))
     }
 }

@@ -84,6 +84,24 @@ pub enum UrgError {
     /// The device went away (USB unplugged, pseudo-terminal closed, end of stream).
     #[error("sensor disconnected: {0}")]
     Disconnected(String),
+    /// A `--port` value that names no usable place (e.g. `tcp:` without a port number).
+    #[error("bad port {port:?}: {why}")]
+    BadPort {
+        /// The value given.
+        port: String,
+        /// What is wrong with it.
+        why: String,
+    },
+    /// Nothing answers at a TCP address (refused, unreachable, unknown host or timed out).
+    #[error(
+        "cannot connect to the sensor at tcp:{addr} ({why}); is it powered and on this network? An Ethernet Hokuyo answers at 192.168.0.10:10940 unless reconfigured"
+    )]
+    NoSuchAddress {
+        /// The address given, `HOST:PORT`.
+        addr: String,
+        /// What the system said.
+        why: String,
+    },
     /// The serial device does not exist (wrong path, or the sensor is not plugged in).
     #[error(
         "no serial device at {path} ({why}); is the sensor plugged in? A USB Hokuyo appears as /dev/ttyACM0 or similar"

@@ -154,6 +154,22 @@ impl SensorParams {
         }
     }
 
+    /// The UST-10LX's parameters: 1081 steps over 270 deg (step 540 ahead, 1440 per turn),
+    /// 2400 rpm (25 ms), DMIN 20 mm and DMAX 30000 mm (UST-10LX data sheet: 0.06 to 10 m
+    /// guaranteed, 30 m the largest distance reported).
+    pub fn ust_10lx() -> Self {
+        SensorParams {
+            model: "UST-10LX".into(),
+            dmin_mm: 20,
+            dmax_mm: 30000,
+            ares: 1440,
+            amin: 0,
+            amax: 1080,
+            afrt: 540,
+            scan_rpm: 2400,
+        }
+    }
+
     /// Bearing of step `step`: `(step - AFRT) * 2 pi / ARES`, radians.
     pub fn step_bearing_rad(&self, step: f64) -> f64 {
         (step - f64::from(self.afrt)) * TAU / f64::from(self.ares)

@@ -47,13 +47,14 @@ pub mod time;
 
 pub use codec::{Command, DataKind, RawScan, ScanRequest, Status, StreamRequest, TimeCode};
 pub use driver::{
-    AcquisitionMode, Backoff, ReconnectingUrg, SerialOpener, SerialTransport, SerialUrg, Urg,
-    UrgConfig, connect_with_backoff, host_now_s, open_serial,
+    AcquisitionMode, Backoff, PortOpener, PortSpec, PortTransport, PortUrg, ReconnectingUrg,
+    SCIP_TCP_PORT, SerialOpener, SerialTransport, SerialUrg, TCP_PREFIX, Urg, UrgConfig,
+    connect_with_backoff, host_now_s, open_port, open_serial, open_tcp,
 };
 #[cfg(feature = "emulator")]
 pub use emulator::{
     Emulator, EmulatorControl, Fault, FixedSource, Model, Profile, PtyServer, SensorCore,
-    serve_pty, serve_pty_with,
+    TcpServer, serve_pty, serve_pty_with, serve_tcp, serve_tcp_with,
 };
 pub use error::UrgError;
 pub use info::{SensorParams, StateInfo, VersionInfo};

@@ -1,16 +1,19 @@
-//! `robot-app emulate`: serves an emulated SCIP 2.0 Hokuyo on a pseudo-terminal.
+//! `robot-app emulate`: serves an emulated SCIP 2.0 Hokuyo on a pseudo-terminal or, as an
+//! Ethernet model does, over TCP.
 
 use std::io::{Read, Write};
+use std::net::SocketAddr;
 use std::path::PathBuf;
 
 use anyhow::Context;
 use clap::Args;
-use urg_driver::{FixedSource, Model, Profile, PtyServer, serve_pty};
+use scan_types::LaserSource;
+use urg_driver::{FixedSource, Model, Profile, PtyServer, TcpServer, serve_pty, serve_tcp};
 
 /// Arguments of `robot-app emulate`.
 #[derive(Debug, Args)]
 pub struct EmulateArgs {
-    /// Sensor model: urg-04lx or utm-30lx.
+    /// Sensor model: urg-04lx, utm-30lx or ust-10lx.
     #[arg(long, default_value = "urg-04lx", value_parser = str::parse::<Model>)]
     pub model: Model,
     /// Start in SCIP 1.1, as a factory URG-04LX does (clients must send SCIP2.0).
@@ -40,16 +43,83 @@ pub struct EmulateArgs {
     /// With --source: the laser topic to read when a bag or MCAP file holds several.
     #[arg(long, value_name = "NAME", requires = "source")]
     pub topic: Option<String>,
+    /// Serve over TCP at ADDR:PORT (or a bare PORT on 127.0.0.1) instead of a pseudo-terminal,
+    /// as an Ethernet Hokuyo does; without a value 127.0.0.1:10940. One client at a time.
+    #[arg(
+        long,
+        value_name = "ADDR:PORT",
+        num_args = 0..=1,
+        default_missing_value = "127.0.0.1:10940",
+        value_parser = parse_tcp_addr
+    )]
+    pub tcp: Option<SocketAddr>,
+}
+
+/// Reads `--tcp`: `ADDR:PORT`, `HOST:PORT` (its first address) or a bare `PORT` on 127.0.0.1.
+fn parse_tcp_addr(s: &str) -> Result<SocketAddr, String> {
+    use std::net::{Ipv4Addr, ToSocketAddrs};
+    if let Ok(a) = s.parse::<SocketAddr>() {
+        return Ok(a);
+    }
+    if let Ok(port) = s.parse::<u16>() {
+        return Ok(SocketAddr::from((Ipv4Addr::LOCALHOST, port)));
+    }
+    s.to_socket_addrs()
+        .map_err(|e| format!("{s:?} is not ADDR:PORT or PORT ({e})"))?
+        .next()
+        .ok_or_else(|| format!("{s:?} resolves to no address"))
+}
+
+/// A running emulator: on a pseudo-terminal or on a TCP address.
+pub enum Served {
+    /// On a pseudo-terminal (its stable path).
+    Pty(PtyServer),
+    /// On a TCP address.
+    Tcp(TcpServer),
+}
+
+impl Served {
+    /// Where a client finds it: the device path, or `tcp:ADDR:PORT` as `--port` takes it.
+    pub fn location(&self) -> String {
+        match self {
+            Served::Pty(s) => s.path().to_string(),
+            Served::Tcp(s) => format!("{}{}", urg_driver::TCP_PREFIX, s.local_addr()),
+        }
+    }
+
+    /// Stops serving.
+    pub fn stop(self) {
+        match self {
+            Served::Pty(s) => s.stop(),
+            Served::Tcp(s) => s.stop(),
+        }
+    }
+}
+
+/// Serves `source` as `profile` on a pseudo-terminal, or over TCP at `tcp`.
+fn serve<S: LaserSource + Send + 'static>(
+    profile: Profile,
+    source: S,
+    tcp: Option<SocketAddr>,
+) -> anyhow::Result<Served> {
+    match tcp {
+        Some(addr) => serve_tcp(addr, profile, source)
+            .map(Served::Tcp)
+            .with_context(|| format!("listening on {addr}")),
+        None => serve_pty(profile, source)
+            .map(Served::Pty)
+            .context("opening a pseudo-terminal"),
+    }
 }
 
 /// Starts the emulator described by `args` (the caller keeps it alive).
-pub fn start(args: &EmulateArgs) -> anyhow::Result<PtyServer> {
+pub fn start(args: &EmulateArgs) -> anyhow::Result<Served> {
     let mut profile = Profile::of(args.model);
     profile.scip1_at_power_up = args.scip1;
-    let server = if let Some(log) = &args.source {
+    if let Some(log) = &args.source {
         let source = scan_log::LoopingLog::open_topic(log, None, args.topic.as_deref())
             .with_context(|| format!("opening the log {}", log.display()))?;
-        serve_pty(profile, source)
+        serve(profile, source, args.tcp)
     } else if args.sim {
         let pose = match &args.pose {
             Some(p) => crate::simsetup::parse_pose(p)?,
@@ -62,12 +132,11 @@ pub fn start(args: &EmulateArgs) -> anyhow::Result<PtyServer> {
             args.seed,
             args.noise.is_on(),
         )?;
-        serve_pty(profile, source)
+        serve(profile, source, args.tcp)
     } else {
         let source = FixedSource::room(profile.params.geometry());
-        serve_pty(profile, source)
-    };
-    server.context("opening a pseudo-terminal")
+        serve(profile, source, args.tcp)
+    }
 }
 
 /// What the emulator described by `args` serves, for its announcement.
@@ -79,18 +148,18 @@ fn served(args: &EmulateArgs) -> String {
     }
 }
 
-/// Runs `robot-app emulate`: prints the device path and serves until Ctrl-C or end of stdin.
+/// Runs `robot-app emulate`: prints the device path (or `tcp:ADDR:PORT`) and serves until Ctrl-C or end of stdin.
 pub fn run(args: EmulateArgs) -> anyhow::Result<()> {
     let server = start(&args)?;
     {
         let mut out = std::io::stdout().lock();
-        writeln!(out, "{}", server.path())?;
+        writeln!(out, "{}", server.location())?;
         out.flush()?;
     }
     tracing::info!(
         "emulated {} on {} ({}); stop with Ctrl-C{}",
         args.model.name(),
-        server.path(),
+        server.location(),
         served(&args),
         if args.no_stdin {
             ""

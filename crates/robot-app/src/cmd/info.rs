@@ -9,7 +9,7 @@ use urg_driver::{AcquisitionMode, Urg, UrgConfig};
 /// Arguments of `robot-app info`.
 #[derive(Debug, Args)]
 pub struct InfoArgs {
-    /// Serial device of the sensor (/dev/ttyACM0, /dev/hokuyo, or the path `robot-app emulate` prints).
+    /// Serial device of the sensor (/dev/ttyACM0, /dev/hokuyo, or the path `robot-app emulate` prints), or tcp:HOST:PORT for an Ethernet model (tcp:192.168.0.10:10940).
     #[arg(long)]
     pub port: String,
 }
@@ -28,7 +28,8 @@ pub fn run_to<W: Write>(args: &InfoArgs, out: &mut W) -> anyhow::Result<()> {
         time_sync_rounds: 0,
         ..UrgConfig::default()
     };
-    let mut urg = Urg::open(&args.port, config)
+    let spec = urg_driver::PortSpec::parse(&args.port)?;
+    let mut urg = Urg::open_spec(&spec, config)
         .with_context(|| format!("connecting to the sensor at {}", args.port))?;
     let version = urg.version().context("reading the version (VV)")?;
     let state = urg.state().context("reading the state (II)")?;

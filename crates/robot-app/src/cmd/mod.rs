@@ -71,13 +71,14 @@ pub const RECONNECT: urg_driver::Backoff = urg_driver::Backoff {
     max_attempts: Some(20),
 };
 
-/// Opens the Hokuyo at `port` so that it survives being unplugged ([`RECONNECT`]).
+/// Opens the Hokuyo at `port` (a serial device or `tcp:HOST:PORT`) so that it survives being
+/// unplugged or its connection dropping ([`RECONNECT`]).
 pub fn open_sensor(
     port: &str,
     config: urg_driver::UrgConfig,
-) -> anyhow::Result<urg_driver::SerialUrg> {
+) -> anyhow::Result<urg_driver::PortUrg> {
     use anyhow::Context;
-    urg_driver::SerialUrg::open_path(port, config, RECONNECT)
+    urg_driver::PortUrg::open_port(port, config, RECONNECT)
         .with_context(|| format!("cannot connect to the Hokuyo on {port}"))
 }
 

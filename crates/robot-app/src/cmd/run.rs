@@ -13,8 +13,8 @@ use crate::runloop::run_loop;
 /// Arguments of `robot-app run`.
 #[derive(Debug, Args)]
 pub struct RunArgs {
-    /// Serial device of the Hokuyo (e.g. /dev/ttyACM0).
-    #[arg(long, value_name = "PATH")]
+    /// Serial device of the Hokuyo (e.g. /dev/ttyACM0), or tcp:HOST:PORT for an Ethernet model.
+    #[arg(long, value_name = "PATH|tcp:HOST:PORT")]
     pub port: String,
     /// Target X,Y in the frame of the start pose.
     #[arg(long, value_name = "X,Y", allow_hyphen_values = true)]

@@ -22,7 +22,7 @@ pub enum ScanFormat {
 /// Arguments of `robot-app scan`.
 #[derive(Debug, Args)]
 pub struct ScanArgs {
-    /// Serial device of the sensor (/dev/ttyACM0, /dev/hokuyo, or the path `robot-app emulate` prints).
+    /// Serial device of the sensor (/dev/ttyACM0, /dev/hokuyo, or the path `robot-app emulate` prints), or tcp:HOST:PORT for an Ethernet model (tcp:192.168.0.10:10940).
     #[arg(long, required_unless_present = "sim", conflicts_with = "sim")]
     pub port: Option<String>,
     /// Number of scans to print (at least 1).
@@ -85,7 +85,7 @@ pub fn run_to<W: Write>(args: &ScanArgs, out: &mut W) -> anyhow::Result<()> {
     let port = args
         .port
         .as_deref()
-        .context("--port PATH or --sim is required")?;
+        .context("--port PATH (or tcp:HOST:PORT) or --sim is required")?;
     let config = UrgConfig {
         mode: if args.stream {
             AcquisitionMode::Streaming

@@ -29,7 +29,7 @@ pub struct SimArgs {
     /// Target X,Y (default: the paper's 4,4).
     #[arg(long, value_name = "X,Y", allow_hyphen_values = true)]
     pub goal: Option<String>,
-    /// Sensor preset: paper, urg-04lx or utm-30lx.
+    /// Sensor preset: paper, urg-04lx, utm-30lx or ust-10lx.
     #[arg(long, default_value = "paper")]
     pub sensor: String,
     /// Noise seed.

@@ -93,6 +93,16 @@ impl<S: LaserSource> SensorCore<S> {
         self.out.clear();
     }
 
+    /// Forgets a client that went away (its TCP connection closed): no stream, no pending
+    /// request, no queued bytes; the timer and the laser state stay as they are.
+    pub(super) fn end_session(&mut self) {
+        self.stream = None;
+        self.get = None;
+        self.held.clear();
+        self.inbuf.clear();
+        self.out.clear();
+    }
+
     /// The sensor's 24-bit timer at `now_ms`.
     pub(super) fn timer(&self, now_ms: u64) -> u32 {
         (now_ms.wrapping_sub(self.timer_origin_ms) & 0xFF_FFFF) as u32

@@ -17,6 +17,7 @@ mod profile;
 mod pty;
 mod scans;
 mod source;
+mod tcp;
 mod transport;
 
 pub use control::{EmulatorControl, Fault};
@@ -24,4 +25,5 @@ pub use machine::SensorCore;
 pub use profile::{Model, Profile, step_bearing_rad};
 pub use pty::{PtyServer, sensor, serve_pty, serve_pty_with};
 pub use source::FixedSource;
+pub use tcp::{TcpServer, serve_tcp, serve_tcp_with};
 pub use transport::Emulator;

@@ -11,14 +11,17 @@ pub enum Model {
     Urg04lx,
     /// Hokuyo UTM-30LX (firmware 1.05, as in the shared capture), with intensities.
     Utm30lx,
+    /// Hokuyo UST-10LX, an Ethernet model (SCIP 2.0 over TCP, port 10940), with intensities.
+    Ust10lx,
 }
 
 impl Model {
-    /// The model's name as [`Model::from_str`] reads it: `urg-04lx` or `utm-30lx`.
+    /// The model's name as [`Model::from_str`] reads it: `urg-04lx`, `utm-30lx` or `ust-10lx`.
     pub fn name(self) -> &'static str {
         match self {
             Model::Urg04lx => "urg-04lx",
             Model::Utm30lx => "utm-30lx",
+            Model::Ust10lx => "ust-10lx",
         }
     }
 }
@@ -29,8 +32,9 @@ impl FromStr for Model {
         match s.to_ascii_lowercase().as_str() {
             "urg-04lx" | "urg04lx" => Ok(Model::Urg04lx),
             "utm-30lx" | "utm30lx" => Ok(Model::Utm30lx),
+            "ust-10lx" | "ust10lx" => Ok(Model::Ust10lx),
             _ => Err(format!(
-                "unknown sensor model {s:?}: expected urg-04lx or utm-30lx"
+                "unknown sensor model {s:?}: expected urg-04lx, utm-30lx or ust-10lx"
             )),
         }
     }
@@ -85,6 +89,23 @@ impl Profile {
                     kv("SERI", "00903971"),
                 ],
                 bit_rate_text: "USB Full Speed".into(),
+                motor_text: "Initial(2400[rpm])<-Default setting by user".into(),
+                intensity: true,
+                serial_settings: false,
+                scip1_at_power_up: false,
+            },
+            // No capture of a UST-10LX is at hand: PP follows its data sheet, the VV text
+            // is ours (Ethernet, no serial settings).
+            Model::Ust10lx => Profile {
+                params: SensorParams::ust_10lx(),
+                version: vec![
+                    kv("VEND", "Hokuyo Automatic Co.,Ltd."),
+                    kv("PROD", "SOKUIKI Sensor UST-10LX"),
+                    kv("FIRM", "1.0.0(emulated)"),
+                    kv("PROT", "SCIP 2.0"),
+                    kv("SERI", "EMU10LX01"),
+                ],
+                bit_rate_text: "Ethernet 100[Mbps]".into(),
                 motor_text: "Initial(2400[rpm])<-Default setting by user".into(),
                 intensity: true,
                 serial_settings: false,
