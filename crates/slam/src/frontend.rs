@@ -7,9 +7,9 @@ use localiser::{MatchParams, MatchTarget};
 use scan_types::{Pose2, Scan, ScanGeometry, angle_diff_rad};
 use serde::{Deserialize, Serialize};
 
-use crate::SlamError;
 use crate::correlative::{Window, search};
 use crate::grid::ScoreGrid;
+use crate::{SlamError, check};
 
 /// Tuning of the [`FrontEnd`].
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -107,47 +107,43 @@ impl Default for FrontEndParams {
 impl FrontEndParams {
     /// Checks every value against its range; the error names the key.
     pub fn validate(&self) -> Result<(), SlamError> {
-        let bad = |key, value: f64, requirement| SlamError::InvalidParam {
-            key,
-            value: value.to_string(),
-            requirement,
-        };
-        for (key, v) in [
-            ("resolution_m", self.resolution_m),
-            ("smoothing_m", self.smoothing_m),
-            ("max_range_m", self.max_range_m),
-            ("voxel_m", self.voxel_m),
-            ("max_refine_shift_m", self.max_refine_shift_m),
-        ] {
-            if !(v.is_finite() && v > 0.0) {
-                return Err(bad(key, v, "must be a positive number"));
-            }
-        }
-        for (key, v) in [
-            ("linear_window_m", self.linear_window_m),
-            ("angular_window_deg", self.angular_window_deg),
-            ("min_range_m", self.min_range_m),
-            ("keyframe_distance_m", self.keyframe_distance_m),
-            ("keyframe_angle_deg", self.keyframe_angle_deg),
-            ("translation_cost", self.translation_cost),
-            ("rotation_cost", self.rotation_cost),
-            ("icp_surface_spacings", self.icp_surface_spacings),
-            ("local_shift_m", self.local_shift_m),
-            ("local_turn_deg", self.local_turn_deg),
-        ] {
-            if !(v.is_finite() && v >= 0.0) {
-                return Err(bad(key, v, "must be a number >= 0"));
-            }
-        }
-        for (key, v) in [
-            ("min_quality", self.min_quality),
-            ("local_quality", self.local_quality),
-            ("rotation_prediction", self.rotation_prediction),
-        ] {
-            if !(0.0..=1.0).contains(&v) {
-                return Err(bad(key, v, "must lie in 0..1"));
-            }
-        }
+        let bad = check::invalid;
+        check::each(
+            &[
+                ("resolution_m", self.resolution_m),
+                ("smoothing_m", self.smoothing_m),
+                ("max_range_m", self.max_range_m),
+                ("voxel_m", self.voxel_m),
+                ("max_refine_shift_m", self.max_refine_shift_m),
+            ],
+            check::positive,
+            "must be a positive number",
+        )?;
+        check::each(
+            &[
+                ("linear_window_m", self.linear_window_m),
+                ("angular_window_deg", self.angular_window_deg),
+                ("min_range_m", self.min_range_m),
+                ("keyframe_distance_m", self.keyframe_distance_m),
+                ("keyframe_angle_deg", self.keyframe_angle_deg),
+                ("translation_cost", self.translation_cost),
+                ("rotation_cost", self.rotation_cost),
+                ("icp_surface_spacings", self.icp_surface_spacings),
+                ("local_shift_m", self.local_shift_m),
+                ("local_turn_deg", self.local_turn_deg),
+            ],
+            |v| v.is_finite() && v >= 0.0,
+            "must be a number >= 0",
+        )?;
+        check::each(
+            &[
+                ("min_quality", self.min_quality),
+                ("local_quality", self.local_quality),
+                ("rotation_prediction", self.rotation_prediction),
+            ],
+            |v| (0.0..=1.0).contains(&v),
+            "must lie in 0..1",
+        )?;
         if self.resolution_m < 0.01 || self.linear_window_m / self.resolution_m > 1000.0 {
             return Err(bad(
                 "resolution_m",

@@ -9,6 +9,7 @@
 //! the run ([`SlamReport`]).
 #![warn(missing_docs)]
 
+mod check;
 mod correlative;
 mod error;
 pub mod eval;

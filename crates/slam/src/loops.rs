@@ -10,7 +10,7 @@ use crate::correlative::{Window, search};
 use crate::frontend::thin_hits;
 use crate::graph::{Edge, OptimiseParams, PoseGraph};
 use crate::grid::ScoreGrid;
-use crate::{FrontEndParams, SlamError};
+use crate::{FrontEndParams, SlamError, check};
 
 /// Tuning of loop closure and the pose graph.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -81,44 +81,39 @@ impl Default for LoopParams {
 impl LoopParams {
     /// Checks every value against its range; the error names the key.
     pub fn validate(&self) -> Result<(), SlamError> {
-        let bad = |key, value: f64, requirement| SlamError::InvalidParam {
-            key,
-            value: value.to_string(),
-            requirement,
-        };
-        for (key, v) in [
-            ("search_radius_m", self.search_radius_m),
-            ("odometry_sigma_m", self.odometry_sigma_m),
-            ("odometry_sigma_deg", self.odometry_sigma_deg),
-            ("closure_sigma_m", self.closure_sigma_m),
-            ("closure_sigma_deg", self.closure_sigma_deg),
-            ("cauchy_scale", self.cauchy_scale),
-            ("reoptimise_sigmas", self.reoptimise_sigmas),
-        ] {
-            if !(v.is_finite() && v > 0.0) {
-                return Err(bad(key, v, "must be a positive number"));
-            }
-        }
-        for (key, v) in [
-            ("odometry_sigma_per_m", self.odometry_sigma_per_m),
-            ("odometry_sigma_per_rad", self.odometry_sigma_per_rad),
-            ("linear_window_m", self.linear_window_m),
-            ("angular_window_deg", self.angular_window_deg),
-        ] {
-            if !(v.is_finite() && (0.0..=100.0).contains(&v)) {
-                return Err(bad(key, v, "must lie in 0..100"));
-            }
-        }
-        for (key, v) in [
-            ("min_quality", self.min_quality),
-            ("reject_weight", self.reject_weight),
-        ] {
-            if !(0.0..=1.0).contains(&v) {
-                return Err(bad(key, v, "must lie in 0..1"));
-            }
-        }
+        check::each(
+            &[
+                ("search_radius_m", self.search_radius_m),
+                ("odometry_sigma_m", self.odometry_sigma_m),
+                ("odometry_sigma_deg", self.odometry_sigma_deg),
+                ("closure_sigma_m", self.closure_sigma_m),
+                ("closure_sigma_deg", self.closure_sigma_deg),
+                ("cauchy_scale", self.cauchy_scale),
+                ("reoptimise_sigmas", self.reoptimise_sigmas),
+            ],
+            check::positive,
+            "must be a positive number",
+        )?;
+        check::each(
+            &[
+                ("odometry_sigma_per_m", self.odometry_sigma_per_m),
+                ("odometry_sigma_per_rad", self.odometry_sigma_per_rad),
+                ("linear_window_m", self.linear_window_m),
+                ("angular_window_deg", self.angular_window_deg),
+            ],
+            |v| v.is_finite() && (0.0..=100.0).contains(&v),
+            "must lie in 0..100",
+        )?;
+        check::each(
+            &[
+                ("min_quality", self.min_quality),
+                ("reject_weight", self.reject_weight),
+            ],
+            |v| (0.0..=1.0).contains(&v),
+            "must lie in 0..1",
+        )?;
         if self.every == 0 {
-            return Err(bad("every", 0.0, "must be at least 1"));
+            return Err(check::invalid("every", 0.0, "must be at least 1"));
         }
         Ok(())
     }
@@ -215,22 +210,26 @@ pub fn close_loops(
         if i < params.min_separation {
             continue;
         }
-        let estimates: Vec<Pose2> = (0..=i)
-            .map(|s| graph.nodes[s / every].compose(&relative[s]))
+        // A scan's estimate: its node's, with the front end's pose relative to the node.
+        let estimate = |s: usize| graph.nodes[s / every].compose(&relative[s]);
+        let tried = candidates(&graph.nodes, m, every, params);
+        report.tried += tried.len();
+        let matches: Vec<(usize, Pose2, f64)> = tried
+            .into_iter()
+            .filter_map(|j| {
+                let (pose, quality) = match_submap(
+                    geometry,
+                    scans,
+                    &points,
+                    &estimate,
+                    (j * every, i),
+                    (front, &match_params, params),
+                )?;
+                Some((j, pose, quality))
+            })
             .collect();
         let mut off = false;
-        for j in candidates(&graph.nodes, m, every, params) {
-            report.tried += 1;
-            let Some((pose, quality)) = match_submap(
-                geometry,
-                scans,
-                &points,
-                &estimates,
-                (j * every, i),
-                (front, &match_params, params),
-            ) else {
-                continue;
-            };
+        for (j, pose, quality) in matches {
             let measured = graph.nodes[j].inverse().compose(&pose);
             let edge = Edge {
                 from: j,
@@ -311,7 +310,7 @@ fn match_submap(
     geometry: &ScanGeometry,
     scans: &[&Scan],
     points: &[Vec<[f64; 2]>],
-    nodes: &[Pose2],
+    estimate: &dyn Fn(usize) -> Pose2,
     (j, i): (usize, usize),
     (front, match_params, params): (&FrontEndParams, &MatchParams, &LoopParams),
 ) -> Option<(Pose2, f64)> {
@@ -323,14 +322,15 @@ fn match_submap(
     let mut world = Vec::new();
     let mut target = MatchTarget::new();
     for k in lo..=hi {
-        let (s, c) = nodes[k].theta_rad.sin_cos();
+        let pose = estimate(k);
+        let (s, c) = pose.theta_rad.sin_cos();
         world.extend(points[k].iter().map(|p| {
             [
-                nodes[k].x_m + c * p[0] - s * p[1],
-                nodes[k].y_m + s * p[0] + c * p[1],
+                pose.x_m + c * p[0] - s * p[1],
+                pose.y_m + s * p[0] + c * p[1],
             ]
         }));
-        target.add_scan(&nodes[k], geometry, scans[k], match_params);
+        target.add_scan(&pose, geometry, scans[k], match_params);
     }
     let window_cells = (params.linear_window_m / front.resolution_m).ceil() as usize + 1;
     let grid = ScoreGrid::new(
@@ -346,7 +346,7 @@ fn match_submap(
         translation_cost: 0.0,
         rotation_cost: 0.0,
     };
-    let found = search(&grid, &points[i], &nodes[i], &window, params.min_quality)?;
+    let found = search(&grid, &points[i], &estimate(i), &window, params.min_quality)?;
     let refined = target
         .align(geometry, scans[i], found.pose, match_params)
         .filter(|m| {
