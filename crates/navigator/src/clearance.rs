@@ -1,7 +1,7 @@
 //! Ray clearances beyond what one scan's expansion gives: the robot's width, and hits seen
 //! earlier from the same spot that have left the field of view.
 
-use scan_types::{Pose2, ScanGeometry, WorldPoint};
+use scan_types::{Pose2, Scan, ScanGeometry, WorldPoint};
 
 /// Cuts `clearances` (one per ray of `geometry`, robot at `pose`) where the disc of radius `r`
 /// around a world point of `hits` outside the field of view enters the ray, by the expansion's
@@ -32,6 +32,25 @@ pub(crate) fn block_by_unseen_hits(
             }
         }
     }
+}
+
+/// `scan` with each hit replaced by the median of it and its two neighbours when all three
+/// lie within 0.1 m of each other (one surface): range noise halved for judging passages.
+pub(crate) fn denoised(scan: &Scan) -> Scan {
+    let mut out = scan.clone();
+    for i in 1..scan.len().saturating_sub(1) {
+        let (Some(a), Some(b), Some(c)) = (
+            scan.hit_range_m(i - 1),
+            scan.hit_range_m(i),
+            scan.hit_range_m(i + 1),
+        ) else {
+            continue;
+        };
+        if a.max(b).max(c) - a.min(b).min(c) <= 0.1 {
+            out.ranges_m[i] = a + b + c - a.max(b).max(c) - a.min(b).min(c);
+        }
+    }
+    out
 }
 
 /// `out[i]` = the smallest of `c[i - half ..= i + half]` (clamped to the scan): a ray's

@@ -32,7 +32,7 @@ mod run;
 
 pub use error::NavigatorError;
 pub use machine::{Action, Navigator, Phase};
-pub use outcome::{Leg, Outcome, Reason};
+pub use outcome::{Leg, NarrowPassage, Outcome, Reason};
 pub use params::{
     HeadingRule, LandmarkParams, LocaliserParams, LoopParams, Method, Params, PlanRule,
     PlanningParams, RobotParams, TrackingParams, TravelRule,

@@ -11,9 +11,9 @@ use crate::MAX_COORD_M;
 
 /// Legs commanded shorter than this are not judged for a stall, metres.
 const STALL_JUDGED_M: f64 = 0.2;
-use crate::clearance::{block_by_unseen_hits, erode};
+use crate::clearance::{block_by_unseen_hits, denoised, erode};
 use crate::drive::{Drive, LegKind};
-use crate::{HeadingRule, Leg, NavigatorError, Outcome, Params, PlanRule, Reason};
+use crate::{HeadingRule, Leg, NarrowPassage, NavigatorError, Outcome, Params, PlanRule, Reason};
 
 /// What the navigator asks its driver to do next.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -68,7 +68,11 @@ enum AfterTurn {
     /// A recovery turn: plan again.
     Replan,
     /// The turn onto a planned ray: drive the leg.
-    Leg { travel_m: f64, target_in_view: bool },
+    Leg {
+        travel_m: f64,
+        target_in_view: bool,
+        narrow: Option<planner::NarrowSpot>,
+    },
 }
 
 enum State {
@@ -77,6 +81,12 @@ enum State {
     Driving(Box<Drive>),
     Finished,
 }
+
+/// A narrow leg whose straight-ahead clearance after the turn falls this much short of the
+/// plan missed its passage, metres.
+const NARROW_MISS_M: f64 = 0.05;
+/// Turns again toward a missed narrow passage before driving what is free.
+const NARROW_RETRIES: usize = 6;
 
 /// The goal-seeking loop of `docs/method.md` for one run, from `start` to `goal`.
 ///
@@ -95,6 +105,8 @@ pub struct Navigator {
     expander: Expander,
     clearances: Vec<f64>,
     eroded: Vec<f64>,
+    /// Clearances at the narrow radius (graded clearance).
+    narrow: Vec<f64>,
     planner: Planner,
     grid: OccupancyGrid,
     detect_params: DetectParams,
@@ -110,6 +122,9 @@ pub struct Navigator {
     spot: (WorldPoint, Vec<WorldPoint>),
     /// Planning failures in a row.
     failures: usize,
+    /// Narrow legs refused after their turn, in a row (the heading missed the passage).
+    narrow_misses: usize,
+    narrow_passages: Vec<NarrowPassage>,
     /// Stalled legs in a row: commanded to drive, and the laser saw (almost) no motion.
     stalled_legs: usize,
     state: State,
@@ -151,6 +166,7 @@ impl Navigator {
             expander: Expander::new(&geometry),
             clearances: vec![0.0; geometry.ray_count],
             eroded: Vec::new(),
+            narrow: vec![0.0; geometry.ray_count],
             commanded_since: (start, Pose2::default()),
             grid: OccupancyGrid::new(params.localiser.map_resolution_m),
             params,
@@ -168,6 +184,8 @@ impl Navigator {
             first_leg: None,
             spot: (start.position(), Vec::new()),
             failures: 0,
+            narrow_misses: 0,
+            narrow_passages: Vec::new(),
             stalled_legs: 0,
             state: State::Starting,
             pending: Action::Scan,
@@ -314,6 +332,7 @@ impl Navigator {
             estimate: self.estimate,
             grid: self.grid,
             first_leg: self.first_leg,
+            narrow_passages: self.narrow_passages,
         }
     }
 
@@ -395,11 +414,29 @@ impl Navigator {
         .ceil() as usize;
         erode(&self.clearances, half, &mut self.eroded);
         std::mem::swap(&mut self.clearances, &mut self.eroded);
-        let plan = self.planner.plan(
+        let graded = self.planner.params().graded();
+        let smooth = graded.then(|| denoised(&scan));
+        if let Some(smooth) = &smooth {
+            // The exact geometry at the narrow radius: no width window, the turn is checked
+            // again on the scan after it.
+            let rn = self.planner.params().narrow_radius_m();
+            self.expander.clearances(smooth, rn, &mut self.narrow);
+            if self.params.planner.remember_turned_away_hits {
+                block_by_unseen_hits(
+                    &self.geometry,
+                    &self.estimate,
+                    &self.spot.1,
+                    rn,
+                    &mut self.narrow,
+                );
+            }
+        }
+        let plan = self.planner.plan_graded(
             &self.estimate,
             &self.geometry,
             &scan,
             &self.clearances,
+            smooth.as_ref().map(|s| (s, self.narrow.as_slice())),
             self.goal,
         );
         match plan {
@@ -407,6 +444,7 @@ impl Navigator {
                 alpha_rad,
                 travel_m,
                 target_in_view,
+                narrow,
                 ..
             } => self.start_turn(
                 alpha_rad,
@@ -414,6 +452,7 @@ impl Navigator {
                 AfterTurn::Leg {
                     travel_m,
                     target_in_view,
+                    narrow,
                 },
             ),
             Plan::Unreachable { tries } => self.finish(
@@ -487,7 +526,8 @@ impl Navigator {
             AfterTurn::Leg {
                 travel_m,
                 target_in_view,
-            } => self.start_leg(turn.before, travel_m, target_in_view),
+                narrow,
+            } => self.start_leg(turn.before, travel_m, target_in_view, narrow),
         }
     }
 
@@ -525,10 +565,53 @@ impl Navigator {
             .fold(f64::INFINITY, f64::min)
     }
 
+    /// Clearance of the ray straight ahead at r + a quarter of the narrow margin (more than
+    /// the plan used, so range noise cannot let a drive graze a jamb), metres.
+    fn narrow_ahead_m(&mut self, scan: &Scan) -> f64 {
+        let p = self.planner.params();
+        let rn = p.robot_radius_m + p.narrow_margin_m / 4.0;
+        self.expander
+            .clearances(&denoised(scan), rn, &mut self.narrow);
+        self.geometry
+            .nearest_index(0.0)
+            .map_or(0.0, |i| self.narrow[i])
+    }
+
     /// After the turn onto a ray: choose the leg (final, to a landmark's B, or short) and
     /// start driving it.
-    fn start_leg(&mut self, scan: Scan, travel_m: f64, target_in_view: bool) -> Action {
-        let free = self.free_ahead_m(&scan);
+    fn start_leg(
+        &mut self,
+        scan: Scan,
+        travel_m: f64,
+        target_in_view: bool,
+        mut narrow: Option<planner::NarrowSpot>,
+    ) -> Action {
+        // A narrow leg keeps as far from what ends it as a full leg does (the base's travel
+        // error), so its free stretch is shortened by the margins' difference.
+        let mut free = match narrow {
+            None => self.free_ahead_m(&scan),
+            Some(_) => {
+                let p = self.planner.params();
+                let short = p.margin_m - p.narrow_margin_m / 4.0;
+                self.narrow_ahead_m(&scan) - short
+            }
+        };
+        if narrow.is_some() && free < travel_m - NARROW_MISS_M {
+            if self.narrow_misses < NARROW_RETRIES {
+                // The turn's error points the robot at a jamb: turn again, from the same spot.
+                self.narrow_misses += 1;
+                tracing::debug!(
+                    free,
+                    travel_m,
+                    "narrow passage missed after the turn; aiming again"
+                );
+                return self.plan_next(scan);
+            }
+            // Out of tries: drive only what the full margin allows.
+            free = self.free_ahead_m(&scan);
+            narrow = None;
+        }
+        self.narrow_misses = 0;
         let limit = travel_m.min(free).min(self.params.planner.max_leg_m);
         if limit < self.params.navigator.min_leg_m {
             self.failures += 1;
@@ -549,6 +632,23 @@ impl Navigator {
             })
             .collect();
         let chosen = select(&usable, &self.select_params);
+        if let Some(spot) = narrow {
+            let passage = NarrowPassage {
+                leg: self.legs + 1,
+                at: spot.at,
+                clearance_m: spot.clearance_m,
+                width_m: spot.width_m,
+            };
+            tracing::info!(
+                leg = passage.leg,
+                x_m = spot.at.x_m(),
+                y_m = spot.at.y_m(),
+                clearance_m = spot.clearance_m,
+                width_m = spot.width_m,
+                "narrow passage"
+            );
+            self.narrow_passages.push(passage);
+        }
         let bearing = self.params.navigator.final_leg_bearing_deg.to_radians();
         let final_leg = (target_in_view || goal_r.bearing_rad().abs() < bearing)
             && goal_ahead <= limit + 1e-9

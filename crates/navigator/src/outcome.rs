@@ -84,4 +84,19 @@ pub struct Outcome {
     pub grid: OccupancyGrid,
     /// The first leg's landmark and point B, world frame.
     pub first_leg: Option<(WorldPoint, WorldPoint)>,
+    /// Every narrow passage a leg was planned through (graded clearance).
+    pub narrow_passages: Vec<NarrowPassage>,
+}
+
+/// A leg planned through a passage narrower than the full margin allows.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct NarrowPassage {
+    /// The leg's number (1 = the first leg driven).
+    pub leg: usize,
+    /// Where the robot's centre passes closest to an obstacle, world frame by the estimate.
+    pub at: WorldPoint,
+    /// Distance from there to the nearest hit of the planning scan, metres.
+    pub clearance_m: f64,
+    /// The passage's narrowest width across the leg on the planning scan, metres.
+    pub width_m: f64,
 }

@@ -83,6 +83,9 @@ pub struct RobotParams {
     pub radius_m: f64,
     /// Extra margin added to r when expanding obstacles, metres.
     pub expansion_margin_m: f64,
+    /// The margin in a narrow passage: any passage at least 2 (r + this) wide is taken
+    /// (graded clearance; off when not below `expansion_margin_m`), metres.
+    pub narrow_margin_m: f64,
 }
 
 /// Path selection.
@@ -234,6 +237,7 @@ impl Params {
             robot: RobotParams {
                 radius_m: 0.3,
                 expansion_margin_m: 0.1,
+                narrow_margin_m: 0.025,
             },
             planner: PlanningParams {
                 rule: PlanRule::MapPath,
@@ -291,6 +295,7 @@ impl Params {
         let mut c = Self::goalseek();
         c.method = Method::Paper;
         c.robot.expansion_margin_m = 0.0;
+        c.robot.narrow_margin_m = 0.0;
         c.planner.rule = PlanRule::Greedy;
         c.planner.width_window_deg = 0.0;
         c.planner.remember_turned_away_hits = false;
@@ -344,6 +349,7 @@ impl Params {
         let table = vec![
             ("robot.radius_m", r.radius_m, 0.0, 5.0, true),
             ("robot.expansion_margin_m", r.expansion_margin_m, 0.0, 2.0, false),
+            ("robot.narrow_margin_m", r.narrow_margin_m, 0.0, 2.0, false),
             ("planner.min_travel_m", p.min_travel_m, 0.0, 20.0, true),
             ("planner.max_leg_m", p.max_leg_m, 0.0, 100.0, true),
             ("planner.grid_resolution_m", p.grid_resolution_m, 0.01, 1.0, false),
@@ -419,6 +425,7 @@ impl Params {
             },
             robot_radius_m: self.robot.radius_m,
             margin_m: self.robot.expansion_margin_m,
+            narrow_margin_m: self.robot.narrow_margin_m,
             min_travel_m: self.planner.min_travel_m,
             max_travel_m: self.planner.max_leg_m,
             grid_resolution_m: self.planner.grid_resolution_m,

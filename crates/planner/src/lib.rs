@@ -40,7 +40,7 @@ mod error;
 mod map;
 
 pub use error::PlannerError;
-pub use map::{MAX_CELLS, ObstacleMemory, TARGET_CELLS};
+pub use map::{BAND_FACTOR, MAX_CELLS, ObstacleMemory, TARGET_CELLS};
 
 use scan_types::{
     Pose2, RobotPoint, Scan, ScanGeometry, WorldPoint, angle_diff_rad, normalize_angle_rad,
@@ -79,11 +79,15 @@ pub struct PlannerParams {
     pub max_no_safe_tries: usize,
     /// Cell size of the obstacle memory, metres.
     pub grid_resolution_m: f64,
+    /// Graded clearance (MapPath only, when below `margin_m`): a passage at least
+    /// 2 (r + `narrow_margin_m`) wide is accepted; the full margin is kept wherever there is
+    /// room, metres.
+    pub narrow_margin_m: f64,
 }
 
 impl Default for PlannerParams {
-    /// goalseek defaults: MapPath, r = 0.3 m + 0.1 m margin, legs 0.3 .. 2.0 m, 0.1 m cells,
-    /// 12 tries (a full turn in 30 deg steps) before giving up.
+    /// goalseek defaults: MapPath, r = 0.3 m + 0.1 m margin (0.025 m in a narrow passage),
+    /// legs 0.3 .. 2.0 m, 0.1 m cells, 12 tries (a full turn in 30 deg steps) before giving up.
     fn default() -> Self {
         Self {
             rule: PlanRule::MapPath,
@@ -94,6 +98,7 @@ impl Default for PlannerParams {
             target_tolerance_m: 0.1,
             max_no_safe_tries: 12,
             grid_resolution_m: 0.1,
+            narrow_margin_m: 0.025,
         }
     }
 }
@@ -107,10 +112,30 @@ impl PlannerParams {
         }
     }
 
+    /// True when narrow passages are planned with the smaller margin.
+    pub fn graded(&self) -> bool {
+        self.rule == PlanRule::MapPath && self.narrow_margin_m < self.margin_m
+    }
+
+    /// Radius of the ray test of a narrow candidate: r itself (its passage's measured width
+    /// and the check after the turn keep the margin), metres.
+    pub fn narrow_radius_m(&self) -> f64 {
+        self.robot_radius_m
+    }
+
+    /// The narrowest passage a narrow leg takes, as measured on one scan: 2 (r +
+    /// `narrow_margin_m`) less a 0.02 m allowance for range noise, metres.
+    pub fn narrowest_m(&self) -> f64 {
+        2.0 * (self.robot_radius_m + self.narrow_margin_m) - WIDTH_ALLOWANCE_M
+    }
+
     /// Checks every field.
     pub fn validate(&self) -> Result<(), PlannerError> {
         let bad = |field, value, why| Err(PlannerError::InvalidParam { field, value, why });
         let nonneg = |v: f64| v.is_finite() && v >= 0.0;
+        if !nonneg(self.narrow_margin_m) {
+            return bad("narrow_margin_m", self.narrow_margin_m, "finite and >= 0");
+        }
         if !nonneg(self.robot_radius_m) {
             return bad("robot_radius_m", self.robot_radius_m, "finite and >= 0");
         }
@@ -159,6 +184,8 @@ pub enum Plan {
         travel_m: f64,
         /// True when heading straight for the target (in view and reachable).
         target_in_view: bool,
+        /// Set when the leg takes a narrow passage (inside the full margin).
+        narrow: Option<NarrowSpot>,
     },
     /// No ray is safe: turn and rescan.
     NoSafeRay,
@@ -170,6 +197,36 @@ pub enum Plan {
     },
 }
 
+/// Range noise allowed for when a passage's width is measured on one scan, metres.
+const WIDTH_ALLOWANCE_M: f64 = 0.02;
+/// How much shorter (path cost) a way through narrow passages must be than the way with the
+/// full margin to be taken, metres.
+const GRADED_GAIN_M: f64 = 1.0;
+/// Plans that must measure a gap too narrow before it is closed on the map.
+pub const GAP_VERDICTS: usize = 3;
+/// Two measured gap middles closer than this are the same gap, metres.
+const GAP_SAME_M: f64 = 0.25;
+
+/// The tightest spot of a leg through a narrow passage.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct NarrowSpot {
+    /// Where along the leg the robot's centre passes closest to a hit (world frame).
+    pub at: WorldPoint,
+    /// Distance from there to that hit, metres (half the passage's width when centred).
+    pub clearance_m: f64,
+    /// The passage's narrowest width across the leg, metres.
+    pub width_m: f64,
+}
+
+/// A ranked candidate leg: score, ray, travel, and whether it uses the narrow clearance.
+#[derive(Debug, Clone, Copy)]
+struct Candidate {
+    score: f64,
+    ray: usize,
+    travel: f64,
+    narrow: bool,
+}
+
 /// Chooses rays toward a target; remembers obstacles for [`PlanRule::MapPath`].
 #[derive(Debug, Clone)]
 pub struct Planner {
@@ -177,8 +234,16 @@ pub struct Planner {
     memory: ObstacleMemory,
     no_safe_tries: usize,
     no_path_tries: usize,
-    /// Scratch: (score, ray, travel) of every safe ray.
-    candidates: Vec<(f64, usize, f64)>,
+    /// Scratch: every safe leg.
+    candidates: Vec<Candidate>,
+    /// Scratch: the hits of the scan narrow passages are judged on, robot frame.
+    narrow_hits: Vec<[f64; 2]>,
+    /// Gaps measured too narrow (middle, world frame) and in how many plans.
+    gaps: Vec<(WorldPoint, usize)>,
+    /// Gaps measured wide enough at least once: never closed.
+    open_gaps: Vec<WorldPoint>,
+    /// Whether this plan's field passes through the band (the full margin found no way).
+    through_band: bool,
 }
 
 impl Planner {
@@ -193,15 +258,29 @@ impl Planner {
         p.max_travel_m = fix(p.max_travel_m, p.min_travel_m);
         p.target_tolerance_m = fix(p.target_tolerance_m, 0.0);
         p.grid_resolution_m = fix(p.grid_resolution_m, 0.01);
+        p.narrow_margin_m = fix(p.narrow_margin_m, 0.0);
         // Shrunk by one cell, so that a safe end right at the edge of an expanded obstacle
         // does not fall into a blocked cell.
-        let inflate = (p.robot_radius_m + p.margin_m - p.grid_resolution_m).max(0.0);
+        let inflate = |m: f64| (p.robot_radius_m + m - p.grid_resolution_m).max(0.0);
+        let memory = if p.graded() {
+            ObstacleMemory::graded(
+                p.grid_resolution_m,
+                inflate(p.narrow_margin_m),
+                inflate(p.margin_m),
+            )
+        } else {
+            ObstacleMemory::new(p.grid_resolution_m, inflate(p.margin_m))
+        };
         Self {
-            memory: ObstacleMemory::new(p.grid_resolution_m, inflate),
+            memory,
             params: p,
             no_safe_tries: 0,
             no_path_tries: 0,
             candidates: Vec::new(),
+            narrow_hits: Vec::new(),
+            gaps: Vec::new(),
+            open_gaps: Vec::new(),
+            through_band: false,
         }
     }
 
@@ -245,8 +324,30 @@ impl Planner {
         clearances_m: &[f64],
         target: WorldPoint,
     ) -> Plan {
+        self.plan_graded(pose, geometry, scan, clearances_m, None, target)
+    }
+
+    /// [`Planner::plan`] that may also take a narrow passage: `narrow` is the scan to judge
+    /// passages on (denoised) and every ray's clearance in it after expansion by
+    /// [`PlannerParams::narrow_radius_m`] (used only when [`PlannerParams::graded`]). A narrow
+    /// leg needs a passage at least [`PlannerParams::narrowest_m`] wide; it is ranked by its
+    /// end's path cost plus the cost of its own stretch inside the full margin, so the middle
+    /// of a passage wins.
+    pub fn plan_graded(
+        &mut self,
+        pose: &Pose2,
+        geometry: &ScanGeometry,
+        scan: &Scan,
+        clearances_m: &[f64],
+        narrow: Option<(&Scan, &[f64])>,
+        target: WorldPoint,
+    ) -> Plan {
         let n = geometry.ray_count.min(clearances_m.len()).min(scan.len());
-        if !(0..n).any(|i| self.leg(clearances_m, i).is_some()) {
+        let narrow = narrow.filter(|(s, c)| self.params.graded() && c.len() >= n && s.len() >= n);
+        self.narrow_hits = narrow.map_or_else(Vec::new, |(s, _)| robot_hits(geometry, s));
+        let narrow_m = narrow.map(|(_, c)| c);
+        let any_narrow = narrow_m.is_some_and(|c| (0..n).any(|i| self.leg(c, i).is_some()));
+        if !any_narrow && !(0..n).any(|i| self.leg(clearances_m, i).is_some()) {
             self.no_safe_tries += 1;
             tracing::debug!(tries = self.no_safe_tries, "no safe ray");
             if self.no_safe_tries >= self.params.max_no_safe_tries {
@@ -266,15 +367,20 @@ impl Planner {
             return plan;
         }
 
-        let map_path = match self.map_path_usable(pose, geometry, clearances_m, n, target) {
-            Ok(usable) => usable,
-            Err(unreachable) => return unreachable,
-        };
+        let map_path =
+            match self.map_path_usable(pose, geometry, (clearances_m, narrow_m), n, target) {
+                Ok(usable) => usable,
+                Err(unreachable) => return unreachable,
+            };
         self.rank_candidates(pose, geometry, clearances_m, (n, target), map_path);
+        if let (Some(narrow), true) = (narrow_m, map_path && self.through_band) {
+            self.rank_narrow(pose, geometry, (clearances_m, narrow), n);
+        }
         // Best score first; ties go to the ray nearer the target's bearing, then the longer leg.
-        let order = |a: &(f64, usize, f64), b: &(f64, usize, f64)| {
-            a.0.total_cmp(&b.0).then_with(|| {
-                tie_key(geometry, a.1, a.2, t_bearing).cmp(&tie_key(geometry, b.1, b.2, t_bearing))
+        let order = |a: &Candidate, b: &Candidate| {
+            a.score.total_cmp(&b.score).then_with(|| {
+                tie_key(geometry, a.ray, a.travel, t_bearing)
+                    .cmp(&tie_key(geometry, b.ray, b.travel, t_bearing))
             })
         };
         // The scan cannot see obstacles just outside its field of view: a leg is also cut
@@ -316,7 +422,7 @@ impl Planner {
         &mut self,
         pose: &Pose2,
         geometry: &ScanGeometry,
-        clearances_m: &[f64],
+        (clearances_m, narrow_m): (&[f64], Option<&[f64]>),
         n: usize,
         target: WorldPoint,
     ) -> Result<bool, Plan> {
@@ -324,13 +430,50 @@ impl Planner {
             return Ok(false);
         }
         self.memory.ensure_contains(pose.position());
-        self.memory.update_field(target);
-        let reachable = (0..n)
-            .filter_map(|i| self.leg(clearances_m, i).map(|t| (i, t)))
-            .any(|(i, t)| {
-                let end = pose.transform_point(geometry.robot_point(i, t));
-                self.memory.path_length_m(end).is_some()
-            });
+        let reaches = |me: &Self, c: &[f64], narrow: bool| {
+            (0..n)
+                .filter_map(|i| me.leg(c, i).map(|t| (i, t)))
+                .any(|(i, t)| {
+                    let end = pose.transform_point(geometry.robot_point(i, t));
+                    // A narrow leg must not cross what the memory holds (a closed gap).
+                    me.memory.path_length_m(end).is_some()
+                        && (!narrow || me.memory_cap_m(pose, geometry.bearing_rad(i), t, true) >= t)
+                })
+        };
+        // The way with the full margin, unless narrow passages shorten it by more than
+        // GRADED_GAIN_M (a door instead of a detour through the unknown).
+        let best = |me: &Self, c: &[f64]| {
+            (0..n)
+                .filter_map(|i| me.leg(c, i).map(|t| (i, t)))
+                .filter_map(|(i, t)| {
+                    me.memory
+                        .path_length_m(pose.transform_point(geometry.robot_point(i, t)))
+                        .map(|d| d + t)
+                })
+                .fold(f64::INFINITY, f64::min)
+        };
+        let mut graded = None;
+        if let Some(narrow) = narrow_m {
+            self.memory.update_field_through(target, true);
+            if reaches(self, clearances_m, false) || reaches(self, narrow, true) {
+                graded = Some(best(self, clearances_m).min(best(self, narrow)));
+            }
+        }
+        self.memory.update_field_through(target, false);
+        self.through_band = false;
+        let mut reachable = reaches(self, clearances_m, false);
+        let full = if reachable {
+            best(self, clearances_m)
+        } else {
+            f64::INFINITY
+        };
+        if let Some(g) = graded
+            && g + GRADED_GAIN_M < full
+        {
+            self.memory.update_field_through(target, true);
+            self.through_band = true;
+            reachable = true;
+        }
         if reachable {
             self.no_path_tries = 0;
             return Ok(true);
@@ -373,38 +516,232 @@ impl Planner {
             } else {
                 end.distance_m(&target)
             };
-            self.candidates.push((score, i, travel));
+            self.candidates.push(Candidate {
+                score,
+                ray: i,
+                travel,
+                narrow: false,
+            });
         }
     }
 
-    /// `Plan::Go` along candidate `(score, ray, travel)` when its leg, cut by the remembered
-    /// obstacles, is still at least the shortest allowed.
+    /// Adds the narrow legs: rays whose narrow clearance reaches clearly farther than their
+    /// full one, scored by their end's path cost plus the band cost of their own stretch.
+    fn rank_narrow(
+        &mut self,
+        pose: &Pose2,
+        geometry: &ScanGeometry,
+        (full, narrow): (&[f64], &[f64]),
+        n: usize,
+    ) {
+        let dirs = geometry.directions();
+        let (mut too_narrow, mut wide_enough) = (Vec::new(), Vec::new());
+        let best_full = self
+            .candidates
+            .iter()
+            .map(|c| c.score)
+            .fold(f64::INFINITY, f64::min);
+        // A narrow leg ends where the full margin holds again (as far from what stops it as a
+        // full leg would), never right against an obstacle.
+        let pull_back =
+            self.params.margin_m + self.params.robot_radius_m - self.params.narrow_radius_m();
+        for i in 0..n {
+            let Some(travel) = self
+                .leg(narrow, i)
+                .map(|t| if narrow[i] <= t { t - pull_back } else { t })
+                .filter(|&t| t >= self.params.min_travel_m)
+            else {
+                continue;
+            };
+            let full_travel = self.leg(full, i).unwrap_or(0.0);
+            if travel < full_travel + self.params.grid_resolution_m {
+                continue;
+            }
+            let end =
+                pose.transform_point(RobotPoint::new(travel * dirs[i][0], travel * dirs[i][1]));
+            // The band only adds cost: a leg no better than the best full one is not judged.
+            let Some(to_go) = self.memory.path_length_m(end).filter(|&c| c < best_full) else {
+                continue;
+            };
+            let (band, spot, mid) = self.band_cost(dirs[i], travel);
+            // A passage between obstacles on both sides (not a stretch along one wall), wide
+            // enough.
+            if !spot.width_m.is_finite() {
+                continue;
+            }
+            if let Some(mid) = mid {
+                let mid = pose.transform_point(RobotPoint::new(mid[0], mid[1]));
+                if spot.width_m < self.params.narrowest_m() {
+                    tracing::trace!(
+                        width_m = spot.width_m,
+                        x_m = mid.x_m(),
+                        y_m = mid.y_m(),
+                        "gap too narrow"
+                    );
+                    push_near(&mut too_narrow, mid);
+                    continue;
+                }
+                tracing::trace!(
+                    width_m = spot.width_m,
+                    x_m = mid.x_m(),
+                    y_m = mid.y_m(),
+                    "gap wide enough"
+                );
+                push_near(&mut wide_enough, mid);
+            }
+            self.candidates.push(Candidate {
+                score: to_go + band,
+                ray: i,
+                travel,
+                narrow: true,
+            });
+        }
+        self.judge_gaps(&too_narrow, &wide_enough);
+    }
+
+    /// Counts the plans in which a gap was measured too narrow (and never wide enough); after
+    /// [`GAP_VERDICTS`] of them it is closed in the memory, so that the map can prove a target
+    /// behind it unreachable.
+    fn judge_gaps(&mut self, too_narrow: &[WorldPoint], wide_enough: &[WorldPoint]) {
+        let same = |a: &WorldPoint, b: &WorldPoint| a.distance_m(b) < GAP_SAME_M;
+        for g in wide_enough {
+            self.gaps.retain(|(p, _)| !same(p, g));
+            push_near(&mut self.open_gaps, *g);
+        }
+        for g in too_narrow {
+            if self.open_gaps.iter().any(|p| same(p, g)) {
+                continue;
+            }
+            match self.gaps.iter_mut().find(|(p, _)| same(p, g)) {
+                Some((_, n)) => {
+                    *n += 1;
+                    if *n == GAP_VERDICTS {
+                        tracing::info!(
+                            x_m = g.x_m(),
+                            y_m = g.y_m(),
+                            plans = GAP_VERDICTS,
+                            "passage too narrow; closed on the planner's map"
+                        );
+                        self.memory.add_hit(*g);
+                    }
+                }
+                None => self.gaps.push((*g, 1)),
+            }
+        }
+    }
+
+    /// The extra cost of driving `travel` m along unit direction `u` (robot frame) inside the
+    /// full margin of the narrow scan's hits: up to `BAND_FACTOR - 1` per metre at the
+    /// narrow radius, falling linearly to 0 at the full radius; and the tightest spot
+    /// (robot frame: `at` is the distance along `u` in its x) with the middle of the
+    /// passage's narrowest cross-section (robot frame) when the leg passes through it.
+    fn band_cost(&self, u: [f64; 2], travel: f64) -> (f64, NarrowSpot, Option<[f64; 2]>) {
+        let p = &self.params;
+        let (full_r, narrow_r) = (p.robot_radius_m + p.margin_m, p.narrow_radius_m());
+        // Hits that can bound a passage the segment takes (up to twice the full radius from
+        // it), with their side.
+        let reach = 2.0 * full_r;
+        let near: Vec<([f64; 2], bool)> = self
+            .narrow_hits
+            .iter()
+            .filter_map(|h| {
+                let along = h[0] * u[0] + h[1] * u[1];
+                let side = h[1] * u[0] - h[0] * u[1];
+                (side.abs() < reach && along > -reach && along < travel + reach)
+                    .then_some((*h, side > 0.0))
+            })
+            .collect();
+        let step = 0.02;
+        let steps = (travel / step).ceil().max(1.0) as usize;
+        let mut cost = 0.0;
+        let mut spot = NarrowSpot {
+            at: WorldPoint::new(0.0, 0.0),
+            clearance_m: f64::INFINITY,
+            width_m: f64::INFINITY,
+        };
+        let mut mid = [0.0; 2];
+        let mut narrowest_at = 0.0;
+        for s in 0..=steps {
+            let t = (s as f64 * step).min(travel);
+            let (x, y) = (t * u[0], t * u[1]);
+            // Per side: the nearest hit, and the three nearest distances (their mean measures
+            // the passage without the low bias that range noise gives the nearest alone).
+            let mut sides = [([f64::INFINITY; 3], [0.0; 2]); 2];
+            for (h, is_left) in &near {
+                let d = (h[0] - x).hypot(h[1] - y);
+                let (best, at) = &mut sides[usize::from(*is_left)];
+                if d < best[2] {
+                    if d < best[0] {
+                        *at = *h;
+                    }
+                    best[2] = d;
+                    best.sort_unstable_by(f64::total_cmp);
+                }
+            }
+            let [(right3, rh), (left3, lh)] = sides;
+            let d = left3[0].min(right3[0]);
+            if d < spot.clearance_m {
+                spot.at = WorldPoint::new(t, 0.0);
+                spot.clearance_m = d;
+            }
+            let width = left3.iter().sum::<f64>() / 3.0 + right3.iter().sum::<f64>() / 3.0;
+            if width < spot.width_m {
+                spot.width_m = width;
+                mid = [(lh[0] + rh[0]) / 2.0, (lh[1] + rh[1]) / 2.0];
+                narrowest_at = t;
+            }
+            let w = ((full_r - d) / (full_r - narrow_r).max(1e-9)).clamp(0.0, 1.0);
+            cost += w * f64::from(map::BAND_FACTOR - 1) * step;
+        }
+        // Only a leg whose narrowest cross-section lies inside it passes through.
+        let through = narrowest_at > step / 2.0 && narrowest_at < travel - step / 2.0;
+        (cost, spot, through.then_some(mid))
+    }
+
+    /// `Plan::Go` along a candidate when its leg, cut by the remembered obstacles, is still
+    /// at least the shortest allowed.
     fn go_if_long_enough(
         &self,
         pose: &Pose2,
         geometry: &ScanGeometry,
-        (_, i, travel): (f64, usize, f64),
+        c: Candidate,
     ) -> Option<Plan> {
-        let travel = self.memory_cap_m(pose, geometry.bearing_rad(i), travel);
-        (travel >= self.params.min_travel_m && travel > 0.0).then(|| Plan::Go {
+        let i = c.ray;
+        let travel = self.memory_cap_m(pose, geometry.bearing_rad(i), c.travel, c.narrow);
+        if !(travel >= self.params.min_travel_m && travel > 0.0) {
+            return None;
+        }
+        let narrow = c.narrow.then(|| {
+            let u = geometry.directions()[i];
+            let (_, spot, _) = self.band_cost(u, travel);
+            let along = spot.at.x_m();
+            NarrowSpot {
+                at: pose.transform_point(RobotPoint::new(along * u[0], along * u[1])),
+                ..spot
+            }
+        });
+        Some(Plan::Go {
             ray_index: i,
             alpha_rad: normalize_angle_rad(geometry.bearing_rad(i)),
             travel_m: travel,
             target_in_view: false,
+            narrow,
         })
     }
 
     /// How far along `bearing_rad` from `pose` (at most `travel_m`) the robot stays out of the
-    /// remembered obstacles; a stretch that starts inside one (the robot next to a wall) is
-    /// allowed until it leaves it.
-    fn memory_cap_m(&self, pose: &Pose2, bearing_rad: f64, travel_m: f64) -> f64 {
+    /// remembered obstacles (a narrow leg: out of their lethal core only); a stretch that
+    /// starts inside one (the robot next to a wall) is allowed until it leaves it.
+    fn memory_cap_m(&self, pose: &Pose2, bearing_rad: f64, travel_m: f64, narrow: bool) -> f64 {
         let step = self.params.grid_resolution_m / 2.0;
         let steps = (travel_m / step).ceil() as usize;
-        let mut left_start = !self.memory.is_blocked(pose.position());
+        let blocked_at =
+            |p: WorldPoint| self.memory.is_blocked(p) || (!narrow && self.memory.is_in_band(p));
+        let mut left_start = !blocked_at(pose.position());
         for s in 1..=steps {
             let t = (s as f64 * step).min(travel_m);
             let p = pose.rotated(bearing_rad).advanced(t).position();
-            let blocked = self.memory.is_blocked(p);
+            let blocked = blocked_at(p);
             if left_start && blocked {
                 return ((s - 1) as f64 * step).min(travel_m);
             }
@@ -441,8 +778,27 @@ impl Planner {
             alpha_rad: t_bearing,
             travel_m: t_range.min(clear).min(self.params.max_travel_m),
             target_in_view: true,
+            narrow: None,
         })
     }
+}
+
+/// Adds `p` to `points` unless one within [`GAP_SAME_M`] is there already.
+fn push_near(points: &mut Vec<WorldPoint>, p: WorldPoint) {
+    if !points.iter().any(|q| q.distance_m(&p) < GAP_SAME_M) {
+        points.push(p);
+    }
+}
+
+/// The scan's hits in the robot frame.
+fn robot_hits(geometry: &ScanGeometry, scan: &Scan) -> Vec<[f64; 2]> {
+    let dirs = geometry.directions();
+    (0..geometry.ray_count.min(scan.len()))
+        .filter_map(|i| {
+            let r = scan.hit_range_m(i).filter(|r| r.is_finite() && *r >= 0.0)?;
+            Some([r * dirs[i][0], r * dirs[i][1]])
+        })
+        .collect()
 }
 
 /// Secondary key for equal scores: angle off the target's bearing, then the shorter leg last.

@@ -1,5 +1,9 @@
 //! The planner's own obstacle memory (a coarse grid of world-frame hits, inflated by the robot
 //! radius and a margin, unknown = free) and the path-length field toward the target over it.
+//!
+//! A graded memory ([`ObstacleMemory::graded`]) is lethal only within a smaller radius and
+//! charges a higher cost per metre in the band between the two radii, as Nav2's inflation
+//! layer does: a narrow door stays passable, and paths keep their distance where there is room.
 
 use scan_types::WorldPoint;
 
@@ -8,6 +12,9 @@ const GROW_MARGIN_M: f64 = 2.0;
 /// Step costs of the wavefront: straight 10, diagonal 14 (units of a tenth of a cell).
 const STRAIGHT: u32 = 10;
 const DIAGONAL: u32 = 14;
+/// Cost factor of a step into a cell of the band of a graded memory (within the full
+/// inflation, outside the lethal one).
+pub const BAND_FACTOR: u32 = 3;
 /// "No path".
 const UNREACHED: u32 = u32::MAX;
 /// The most cells the grid grows to (400 m square at 0.1 m); beyond it, new places count as
@@ -22,6 +29,8 @@ pub const TARGET_CELLS: usize = 1 << 20;
 pub struct ObstacleMemory {
     resolution_m: f64,
     inflate_m: f64,
+    /// The largest radius stamped (room kept around the grid's content), metres.
+    grow_m: f64,
     /// World coordinates of the lower-left corner of cell (0, 0).
     origin: (f64, f64),
     width: usize,
@@ -30,12 +39,18 @@ pub struct ObstacleMemory {
     hits: Vec<u16>,
     /// How many hit cells lie within the inflation radius of each cell (> 0: blocked).
     blocked: Vec<u16>,
+    /// How many hit cells lie within the band radius of each cell (graded memory only).
+    near: Vec<u16>,
     /// Cell offsets within the inflation radius.
     stamp: Vec<(i32, i32)>,
+    /// Cell offsets within the band radius (empty unless graded).
+    band_stamp: Vec<(i32, i32)>,
     /// Bumped whenever the set of blocked cells changes.
     version: u64,
     /// Set once the grid has refused to grow past [`MAX_CELLS`].
     full: bool,
+    /// Whether the current field passes through the band.
+    through_band: bool,
     /// The path-length field (tenths of a cell, above `field_base_m`) and what it was
     /// computed for: the memory's version and the target's cell (which may lie off the grid).
     field: Vec<u32>,
@@ -54,32 +69,53 @@ pub struct ObstacleMemory {
 impl ObstacleMemory {
     /// An empty memory with cells of `resolution_m` and obstacles grown by `inflate_m`.
     pub fn new(resolution_m: f64, inflate_m: f64) -> Self {
-        let reach = (inflate_m / resolution_m).floor() as i32;
-        let mut stamp = Vec::new();
-        for dy in -reach..=reach {
-            for dx in -reach..=reach {
-                let dist = ((dx * dx + dy * dy) as f64).sqrt() * resolution_m;
-                if dist <= inflate_m {
-                    stamp.push((dx, dy));
+        Self::graded(resolution_m, inflate_m, inflate_m)
+    }
+
+    /// An empty memory whose obstacles are lethal within `lethal_m` and cost
+    /// `BAND_FACTOR` (3) times as much per metre out to `band_m` (no band when
+    /// `band_m <= lethal_m`).
+    pub fn graded(resolution_m: f64, lethal_m: f64, band_m: f64) -> Self {
+        let stamp_of = |radius_m: f64, skip_m: f64| {
+            let reach = (radius_m / resolution_m).floor() as i32;
+            let mut stamp = Vec::new();
+            for dy in -reach..=reach {
+                for dx in -reach..=reach {
+                    let dist = ((dx * dx + dy * dy) as f64).sqrt() * resolution_m;
+                    if dist <= radius_m && dist > skip_m {
+                        stamp.push((dx, dy));
+                    }
                 }
             }
-        }
+            stamp
+        };
+        let stamp = stamp_of(lethal_m, -1.0);
+        let band_stamp = if band_m > lethal_m {
+            stamp_of(band_m, lethal_m)
+        } else {
+            Vec::new()
+        };
+        let inflate_m = lethal_m.max(band_m);
         Self {
             resolution_m,
-            inflate_m,
+            inflate_m: lethal_m,
+            grow_m: inflate_m,
             origin: (0.0, 0.0),
             width: 0,
             height: 0,
             hits: Vec::new(),
             blocked: Vec::new(),
+            near: Vec::new(),
             stamp,
+            band_stamp,
             version: 0,
             full: false,
+            through_band: false,
             field: Vec::new(),
             field_base_m: 0.0,
             field_key: None,
             seeds: Vec::new(),
-            buckets: vec![Vec::new(); (DIAGONAL + 1) as usize],
+            buckets: vec![Vec::new(); (DIAGONAL * BAND_FACTOR + 1) as usize],
             popped: Vec::new(),
             passable: Vec::new(),
         }
@@ -131,8 +167,8 @@ impl ObstacleMemory {
             return;
         }
         let inside = |v: f64, lo: f64, cells: usize| {
-            v - self.inflate_m - 1.0 >= lo
-                && v + self.inflate_m + 1.0 < lo + cells as f64 * self.resolution_m
+            v - self.grow_m - 1.0 >= lo
+                && v + self.grow_m + 1.0 < lo + cells as f64 * self.resolution_m
         };
         if self.width > 0
             && inside(x, self.origin.0, self.width)
@@ -193,6 +229,11 @@ impl ObstacleMemory {
         self.height = h;
         self.hits = hits;
         self.blocked = vec![0; w * h];
+        self.near = if self.band_stamp.is_empty() {
+            Vec::new()
+        } else {
+            vec![0; w * h]
+        };
         for c in 0..w * h {
             if self.hits[c] > 0 {
                 self.stamp_cell(c);
@@ -203,13 +244,30 @@ impl ObstacleMemory {
 
     fn stamp_cell(&mut self, c: usize) {
         let (col, row) = ((c % self.width) as i32, (c / self.width) as i32);
-        for &(dx, dy) in &self.stamp {
+        let (w, h) = (self.width, self.height);
+        let within = move |(dx, dy): (i32, i32)| {
             let (x, y) = (col + dx, row + dy);
-            if x >= 0 && y >= 0 && (x as usize) < self.width && (y as usize) < self.height {
-                let k = y as usize * self.width + x as usize;
-                self.blocked[k] = self.blocked[k].saturating_add(1);
-            }
+            (x >= 0 && y >= 0 && (x as usize) < w && (y as usize) < h)
+                .then(|| y as usize * w + x as usize)
+        };
+        for k in self.stamp.iter().filter_map(|&o| within(o)) {
+            self.blocked[k] = self.blocked[k].saturating_add(1);
         }
+        for k in self.band_stamp.iter().filter_map(|&o| within(o)) {
+            self.near[k] = self.near[k].saturating_add(1);
+        }
+    }
+
+    /// True when cell `k` is closed to the current field: the lethal core, and the band unless
+    /// the field passes through it.
+    fn closed(&self, k: usize) -> bool {
+        self.blocked[k] > 0 || (!self.through_band && !self.near.is_empty() && self.near[k] > 0)
+    }
+
+    /// True when `p` lies within the band of a graded memory (within the full inflation but
+    /// outside the lethal one); always false for a memory that is not graded.
+    pub fn is_in_band(&self, p: WorldPoint) -> bool {
+        !self.near.is_empty() && self.cell_of(p).is_some_and(|c| self.near[c] > 0)
     }
 
     fn cell_of(&self, p: WorldPoint) -> Option<usize> {
@@ -238,6 +296,17 @@ impl ObstacleMemory {
     /// free cell just inside the grid's border is seeded with its straight-line distance to
     /// the target.
     pub fn update_field(&mut self, target: WorldPoint) -> bool {
+        self.update_field_through(target, false)
+    }
+
+    /// [`ObstacleMemory::update_field`]; with `through_band` a graded memory's band is
+    /// passable at its higher cost, otherwise it is closed like the lethal core.
+    pub fn update_field_through(&mut self, target: WorldPoint, through_band: bool) -> bool {
+        let through_band = through_band && !self.near.is_empty();
+        if through_band != self.through_band {
+            self.through_band = through_band;
+            self.field_key = None;
+        }
         let (x, y) = (target.x_m(), target.y_m());
         if !(x.is_finite() && y.is_finite()) {
             return false;
@@ -278,10 +347,15 @@ impl ObstacleMemory {
     fn seed_at_target(&mut self, tc: usize) {
         self.field_base_m = 0.0;
         self.seeds.push((0, tc as u32));
-        if self.blocked[tc] == 0 {
+        if !self.closed(tc) {
             return;
         }
-        let reach = (self.inflate_m / self.resolution_m).ceil() as i32 + 1;
+        let radius = if self.through_band {
+            self.inflate_m
+        } else {
+            self.grow_m
+        };
+        let reach = (radius / self.resolution_m).ceil() as i32 + 1;
         let (tcol, trow) = ((tc % self.width) as i32, (tc / self.width) as i32);
         for dy in -reach..=reach {
             for dx in -reach..=reach {
@@ -290,7 +364,7 @@ impl ObstacleMemory {
                     continue;
                 }
                 let k = y as usize * self.width + x as usize;
-                if self.blocked[k] == 0 {
+                if !self.closed(k) {
                     let cost = (((dx * dx + dy * dy) as f64).sqrt() * STRAIGHT as f64) as u32;
                     self.seeds.push((cost, k as u32));
                 }
@@ -307,7 +381,7 @@ impl ObstacleMemory {
             .chain((2..h - 2).flat_map(|r| [r * w + 1, r * w + w - 2]));
         let mut dists = Vec::new();
         for k in ring {
-            if self.blocked[k] == 0 {
+            if !self.closed(k) {
                 let (cx, cy) = self.centre_of(k);
                 dists.push(((cx - x).hypot(cy - y), k));
             }
@@ -329,8 +403,10 @@ impl ObstacleMemory {
         let n = self.width * self.height;
         // Passable cells, with the grid's border rows and columns closed so that neighbour
         // indices never leave the grid.
-        self.passable.clear();
-        self.passable.extend(self.blocked.iter().map(|&b| b == 0));
+        let mut passable = std::mem::take(&mut self.passable);
+        passable.clear();
+        passable.extend((0..n).map(|k| !self.closed(k)));
+        self.passable = passable;
         for c in 0..w {
             self.passable[c] = false;
             self.passable[n - 1 - c] = false;
@@ -411,9 +487,17 @@ impl ObstacleMemory {
         diagonal: &[(isize, isize, isize); 4],
     ) {
         let nb = self.buckets.len();
+        let graded = self.through_band;
+        let step = |k: usize, base: u32| {
+            if graded && self.near[k] > 0 {
+                base * BAND_FACTOR
+            } else {
+                base
+            }
+        };
         for &o in straight {
             let k = (c as isize + o) as usize;
-            let nc = cost + STRAIGHT;
+            let nc = cost + step(k, STRAIGHT);
             if self.passable[k] && nc < self.field[k] {
                 self.field[k] = nc;
                 self.buckets[nc as usize % nb].push(k as u32);
@@ -421,7 +505,7 @@ impl ObstacleMemory {
         }
         for &(o, a, b) in diagonal {
             let k = (c as isize + o) as usize;
-            let nc = cost + DIAGONAL;
+            let nc = cost + step(k, DIAGONAL);
             if self.passable[k]
                 && self.passable[(c as isize + a) as usize]
                 && self.passable[(c as isize + b) as usize]
@@ -443,7 +527,7 @@ impl ObstacleMemory {
             return None;
         }
         let to_m = self.resolution_m / STRAIGHT as f64;
-        if self.field[c] != UNREACHED && self.blocked[c] == 0 {
+        if self.field[c] != UNREACHED && !self.closed(c) {
             return Some(self.field_base_m + self.field[c] as f64 * to_m);
         }
         let (col, row) = ((c % self.width) as i64, (c / self.width) as i64);
@@ -559,5 +643,48 @@ mod tests {
         assert!(m.cell_count() <= MAX_CELLS);
         assert!(!m.is_blocked(WorldPoint::new(10_000.0, 10_000.0)));
         assert!(m.is_blocked(WorldPoint::new(0.0, 0.0)));
+    }
+
+    #[test]
+    fn a_graded_memory_keeps_a_narrow_gap_open_at_a_higher_cost() {
+        // A wall of hits on cell centres, y = 0.05, x = +-0.35 ... +-2.95: a gap of 0.7 m
+        // between hit centres. Inflated by 0.3 m (3 cells) it is closed; lethal at 0.2 m
+        // (2 cells) the columns x = -0.05 and 0.05 stay open, inside the 0.3 m band.
+        let wall = |m: &mut ObstacleMemory| {
+            for k in 3..30 {
+                let x = k as f64 * 0.1 + 0.05;
+                m.add_hit(WorldPoint::new(x, 0.05));
+                m.add_hit(WorldPoint::new(-x, 0.05));
+            }
+        };
+        let (start, target) = (WorldPoint::new(0.05, -1.95), WorldPoint::new(0.05, 2.05));
+        // Radii a hair above whole cells: 3 x 0.1 is 0.30000000000000004 in floating point.
+        let (lethal, band) = (0.2 + 1e-9, 0.3 + 1e-9);
+        let mut full = ObstacleMemory::new(0.1, band);
+        wall(&mut full);
+        full.ensure_contains(start);
+        full.update_field(target);
+        // Around a wall end instead: more than 2 sqrt(3.2^2 + 2^2) = 7.55 m.
+        let around = full.path_length_m(start).unwrap();
+        assert!(around > 7.5, "{around}");
+        let mut graded = ObstacleMemory::graded(0.1, lethal, band);
+        wall(&mut graded);
+        graded.ensure_contains(start);
+        // Band closed: the same detour as the full memory's.
+        graded.update_field(target);
+        assert!((graded.path_length_m(start).unwrap() - around).abs() < 1e-9);
+        graded.update_field_through(target, true);
+        // Straight through: 40 steps of 0.1 m, the one into the wall's row (in the band)
+        // at three times the cost: 4.2 m.
+        let through = graded.path_length_m(start).unwrap();
+        assert!(
+            (through - (4.0 + 0.1 * f64::from(BAND_FACTOR - 1))).abs() < 1e-9,
+            "{through}"
+        );
+        let gap = WorldPoint::new(0.05, 0.05);
+        assert!(graded.is_in_band(gap) && !graded.is_blocked(gap));
+        assert!(graded.is_blocked(WorldPoint::new(0.15, 0.05)));
+        assert!(!graded.is_in_band(WorldPoint::new(0.05, 0.15)));
+        assert!(full.is_blocked(gap) && !full.is_in_band(gap));
     }
 }

@@ -318,7 +318,8 @@ fn short_clearance_is_not_safe_and_legs_are_capped() {
                 ray_index: 100,
                 alpha_rad: g.bearing_rad(100),
                 travel_m: 2.0,
-                target_in_view: false
+                target_in_view: false,
+                narrow: None,
             },
             "{rule:?}"
         );
@@ -361,7 +362,8 @@ fn target_in_view_but_blocked_is_not_driven_at() {
             ray_index: 342,
             alpha_rad: 0.0,
             travel_m: 2.0,
-            target_in_view: true
+            target_in_view: true,
+            narrow: None,
         }
     );
     let _ = PI;
