@@ -61,12 +61,12 @@ pub struct Summary {
 
 /// One run's term of Success weighted by Path Length (Anderson et al. 2018):
 /// `S * l / max(p, l)` for success `S`, shortest path `l` and path driven `p`; 1 for a success
-/// with `l = 0`.
+/// with no positive `l`.
 pub fn spl(reached: bool, geodesic_m: f64, path_m: f64) -> f64 {
     if !reached {
         return 0.0;
     }
-    if !(geodesic_m > 0.0) {
+    if geodesic_m.is_nan() || geodesic_m <= 0.0 {
         return 1.0;
     }
     // `f64::max` ignores a NaN `path_m`.

@@ -60,8 +60,7 @@ impl GeodesicMap {
         let (lo, hi) = world.bounds();
         let (w, h) = (hi.x_m() - lo.x_m(), hi.y_m() - lo.y_m());
         let cells = (w / cell_m).ceil().max(1.0) * (h / cell_m).ceil().max(1.0);
-        // Also catches a NaN extent.
-        if !(cells <= GEODESIC_MAX_CELLS as f64) {
+        if cells.is_nan() || cells > GEODESIC_MAX_CELLS as f64 {
             return Err(SimError::WorldTooLarge {
                 world: world.name().to_string(),
                 width_m: w,
