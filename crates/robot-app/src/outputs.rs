@@ -22,8 +22,17 @@ pub struct Summary {
     pub scans: usize,
     /// Collisions recorded by the simulator (0 on a real robot).
     pub collisions: usize,
-    /// Distance driven, metres (sum of the forward moves commanded).
+    /// Distance commanded, metres: the sum of the forward moves the navigator sent (not what
+    /// the robot drove; see `true_path_length_m`).
     pub path_length_m: f64,
+    /// Distance the robot truly drove, metres (simulator only): the `p` of SPL.
+    pub true_path_length_m: Option<f64>,
+    /// Shortest collision-free path from start to target for the robot's disc in the true
+    /// world, metres (simulator only; `null` when none was found): the `l` of SPL.
+    pub geodesic_m: Option<f64>,
+    /// Success weighted by path length of this run, [`spl`] (simulator only; `null` without
+    /// a geodesic).
+    pub spl: Option<f64>,
     /// Distance between the final estimate and the true position, metres (simulator only).
     pub final_position_error_m: Option<f64>,
     /// Final heading error, degrees (simulator only).
@@ -48,6 +57,20 @@ pub struct Summary {
     pub final_truth: Option<[f64; 3]>,
     /// A one-line note on how the run ended (the error, for a failure).
     pub note: String,
+}
+
+/// One run's term of Success weighted by Path Length (Anderson et al. 2018):
+/// `S * l / max(p, l)` for success `S`, shortest path `l` and path driven `p`; 1 for a success
+/// with no positive `l`.
+pub fn spl(reached: bool, geodesic_m: f64, path_m: f64) -> f64 {
+    if !reached {
+        return 0.0;
+    }
+    if geodesic_m.is_nan() || geodesic_m <= 0.0 {
+        return 1.0;
+    }
+    // `f64::max` ignores a NaN `path_m`.
+    geodesic_m / path_m.max(geodesic_m)
 }
 
 /// Writes `bytes` to `path` atomically ([`scan_types::write_atomic`]).

@@ -119,6 +119,19 @@ fn a_world_file_runs_its_own_scenario() {
     let target = table["target"].as_array().unwrap();
     assert!((target[0].as_float().unwrap() - gx).abs() < 1e-9, "{text}");
     assert!((target[1].as_float().unwrap() - gy).abs() < 1e-9, "{text}");
+    // SPL's inputs: the geodesic is never shorter than the straight line, SPL in [0, 1] and
+    // 0 exactly for a failure.
+    let start = summary["start"].as_array().unwrap();
+    let straight = (start[0].as_f64().unwrap() - gx).hypot(start[1].as_f64().unwrap() - gy);
+    let l = summary["geodesic_m"].as_f64().unwrap();
+    assert!(l >= straight - 1e-9, "{summary}");
+    assert!(
+        summary["true_path_length_m"].as_f64().unwrap() > 0.0,
+        "{summary}"
+    );
+    let spl = summary["spl"].as_f64().unwrap();
+    assert!((0.0..=1.0).contains(&spl), "{summary}");
+    assert_eq!(spl == 0.0, summary["reached"] == false, "{summary}");
 
     // A batch in that world runs the same scenario.
     let batch = dir.path().join("batch");
@@ -141,6 +154,10 @@ fn a_world_file_runs_its_own_scenario() {
     assert_eq!(rows[0]["group"], "w3-scenario");
     assert_eq!(rows[0]["goal"], summary["goal"]);
     assert_eq!(rows[0]["start"], summary["start"]);
+    // One run of the same scenario and robot: the same geodesic; the group's SPL is its SPL.
+    assert_eq!(rows[0]["geodesic_m"], summary["geodesic_m"]);
+    assert_eq!(file["aggregates"][0]["spl"], rows[0]["spl"]);
+    assert_eq!(file["aggregates"][0]["spl_runs"], 1);
 }
 
 #[test]

@@ -3,6 +3,22 @@
 
 mod outputs {
     use robot_app::outputs::*;
+
+    #[test]
+    fn spl_by_hand() {
+        // Success on a path twice the shortest: 0.5.
+        assert_eq!(spl(true, 4.0, 8.0), 0.5);
+        // Failure: 0 whatever the paths.
+        assert_eq!(spl(false, 4.0, 4.0), 0.0);
+        // A path "shorter" than the geodesic (the geodesic's grid overestimates a little): 1.
+        assert_eq!(spl(true, 4.0, 3.9), 1.0);
+        // Exact path: 1; start on the target: 1.
+        assert_eq!(spl(true, 2.5, 2.5), 1.0);
+        assert_eq!(spl(true, 0.0, 0.0), 1.0);
+        // Bad numbers never give NaN.
+        assert_eq!(spl(true, 4.0, f64::NAN), 1.0);
+        assert_eq!(spl(true, f64::NAN, 3.0), 1.0);
+    }
     use scan_log::{LegRecord, RunLog, trajectory_csv, tum, write_trajectory};
     use scan_types::{Pose2, WorldPoint};
     use std::f64::consts::FRAC_PI_2;
@@ -78,6 +94,9 @@ mod outputs {
             scans: 1,
             collisions: 0,
             path_length_m: 0.0,
+            true_path_length_m: None,
+            geodesic_m: None,
+            spl: None,
             final_position_error_m: None,
             final_heading_error_deg: None,
             ate_rmse_m: None,
@@ -96,6 +115,10 @@ mod outputs {
         let v: serde_json::Value = serde_json::from_str(&text).unwrap();
         assert_eq!(v["reason"], "sensor_failure");
         assert_eq!(v["reached"], false);
+        // The SPL fields are there, null off the simulator.
+        for k in ["true_path_length_m", "geodesic_m", "spl"] {
+            assert!(v.get(k).is_some_and(|x| x.is_null()), "{k}: {text}");
+        }
         let mut names: Vec<String> = std::fs::read_dir(dir.path())
             .unwrap()
             .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
@@ -356,6 +379,9 @@ mod batch_table {
             ate_rmse_m: Some(err),
             goal_distance_m: Some(0.1),
             path_length_m: 1.0,
+            true_path_length_m: None,
+            geodesic_m: None,
+            spl: None,
             cpu_time_s: 0.1,
             note: String::new(),
         }
@@ -379,6 +405,27 @@ mod batch_table {
         assert!(t.lines().count() == 3);
         // The kind column is padded: "paper" then three spaces before the method.
         assert!(t.contains("paper    goalseek"), "{t}");
+        // No row has a geodesic: no SPL.
+        assert_eq!((a[0].spl, a[0].spl_runs), (None, 0));
+    }
+
+    #[test]
+    fn spl_is_the_mean_over_runs_with_a_geodesic() {
+        let mut rows = vec![
+            row("a", true, 0.0),
+            row("a", false, 0.0),
+            row("a", true, 0.0),
+        ];
+        // Success on a path twice the geodesic (0.5), a failure (0), a run without a geodesic
+        // (left out): (0.5 + 0) / 2.
+        rows[0].spl = Some(0.5);
+        rows[1].spl = Some(0.0);
+        let a = aggregate(&rows);
+        assert_eq!(a[0].spl_runs, 2);
+        assert!((a[0].spl.unwrap() - 0.25).abs() < 1e-12);
+        let t = table(&a);
+        assert!(t.lines().next().unwrap().contains("SPL"), "{t}");
+        assert!(t.contains(" 0.250 "), "{t}");
     }
 }
 

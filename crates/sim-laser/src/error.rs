@@ -67,4 +67,20 @@ pub enum SimError {
         /// What is wrong with it.
         message: String,
     },
+    /// A world too large for an evaluation grid (the geodesic).
+    #[error(
+        "world {world} is {width_m:.1} m x {height_m:.1} m: more than {max_cells} cells of {cell_m} m for the geodesic"
+    )]
+    WorldTooLarge {
+        /// The world's name.
+        world: String,
+        /// Its width, metres.
+        width_m: f64,
+        /// Its height, metres.
+        height_m: f64,
+        /// The grid cell, metres.
+        cell_m: f64,
+        /// The most cells allowed.
+        max_cells: usize,
+    },
 }

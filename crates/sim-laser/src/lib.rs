@@ -22,6 +22,7 @@
 mod description;
 mod error;
 mod generate;
+mod geodesic;
 mod mapserver;
 mod sampling;
 mod scenario;
@@ -33,6 +34,7 @@ mod world;
 pub use description::{WorldDescription, read_description};
 pub use error::SimError;
 pub use generate::{GenParams, generate_world};
+pub use geodesic::{GEODESIC_CELL_M, GEODESIC_MAX_CELLS, GEODESIC_SNAP_M, GeodesicMap, geodesic_m};
 pub use mapserver::{MapMode, MapServerYaml, parse_map_yaml};
 pub use sampling::{
     FreeSpace, PAIR_CELL_M, PairSampler, WorldKind, corridor_world_params, generated_world,

@@ -141,8 +141,33 @@ impl FreeSpace {
         self.random_pair_where(rng, min_m, |_| true)
     }
 
+    /// Grid size in cells (columns, rows).
+    pub(crate) fn dims(&self) -> (usize, usize) {
+        (self.nx, self.ny)
+    }
+
+    /// The grid's lower-left corner.
+    pub(crate) fn origin(&self) -> WorldPoint {
+        self.lo
+    }
+
+    /// Cell side, metres.
+    pub(crate) fn cell_m(&self) -> f64 {
+        self.cell_m
+    }
+
+    /// Whether cell `k` (row-major) is free.
+    pub(crate) fn is_free(&self, k: usize) -> bool {
+        self.component.get(k).is_some_and(|&c| c != 0)
+    }
+
+    /// The connected region of cell `k` (0: not free).
+    pub(crate) fn region(&self, k: usize) -> u32 {
+        self.component.get(k).copied().unwrap_or(0)
+    }
+
     /// The centre of cell `k`.
-    fn centre(&self, k: usize) -> WorldPoint {
+    pub(crate) fn centre(&self, k: usize) -> WorldPoint {
         WorldPoint::new(
             self.lo.x_m() + ((k % self.nx) as f64 + 0.5) * self.cell_m,
             self.lo.y_m() + ((k / self.nx) as f64 + 0.5) * self.cell_m,

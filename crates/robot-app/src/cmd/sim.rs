@@ -5,10 +5,10 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, bail};
 use clap::Args;
 use scan_types::{Pose2, WorldPoint};
-use sim_laser::{SensorPreset, SimSetup, paper_start, paper_target};
+use sim_laser::{GeodesicMap, SensorPreset, SimSetup, paper_start, paper_target};
 
 use crate::config::Params;
-use crate::outputs::{Reason, Summary, write_summary};
+use crate::outputs::{Reason, Summary, spl, write_summary};
 use crate::runloop::run_loop;
 use scan_log::write_trajectory;
 
@@ -111,9 +111,46 @@ pub fn simulate(
 
 /// Runs one simulated run (no files written), showing every scan with its true pose and the
 /// navigator's estimate to `observer`.
-pub fn simulate_observed(
+pub fn simulate_observed(spec: &SimSpec, observer: Option<ScanObserver>) -> anyhow::Result<SimRun> {
+    simulate_inner(spec, observer, geodesic_of(spec))
+}
+
+/// Runs one simulated run (no files written) whose geodesic is already known.
+pub fn simulate_with_geodesic(spec: &SimSpec, geodesic_m: Option<f64>) -> anyhow::Result<SimRun> {
+    simulate_inner(spec, None, geodesic_m)
+}
+
+/// The free space of `spec`'s world for its robot, for geodesics; `None` (logged) when the
+/// world is too large.
+pub fn geodesic_map(spec: &SimSpec) -> Option<GeodesicMap> {
+    GeodesicMap::new(&spec.setup.world, spec.setup.robot_radius_m)
+        .inspect_err(|e| tracing::warn!("no geodesic, SPL null: {e}"))
+        .ok()
+}
+
+/// The geodesic of `spec` (its start to its target for its robot) in `map`; `None` (logged)
+/// when no free path joins them.
+pub fn geodesic_in(map: &GeodesicMap, spec: &SimSpec) -> Option<f64> {
+    let l = map.length_m(spec.setup.start.position(), spec.goal);
+    if l.is_none() {
+        tracing::warn!(
+            world = %spec.setup.world_name,
+            seed = spec.setup.seed,
+            "no free path from the start to the target for the robot: geodesic and SPL null"
+        );
+    }
+    l
+}
+
+/// The geodesic of `spec`, computed for this run alone.
+pub fn geodesic_of(spec: &SimSpec) -> Option<f64> {
+    geodesic_map(spec).and_then(|m| geodesic_in(&m, spec))
+}
+
+fn simulate_inner(
     spec: &SimSpec,
     mut observer: Option<ScanObserver>,
+    geodesic_m: Option<f64>,
 ) -> anyhow::Result<SimRun> {
     let cpu0 = thread_cpu_time_s();
     let sim = spec.setup.build()?;
@@ -138,6 +175,7 @@ pub fn simulate_observed(
     let cpu = thread_cpu_time_s() - cpu0;
     let t = truth.pose();
     let collisions = truth.collisions();
+    let travelled = truth.travelled_m();
     let goal_distance = t.position().distance_m(&spec.goal);
     let reason = if collisions > 0 {
         Reason::Collision
@@ -164,6 +202,9 @@ pub fn simulate_observed(
         scans: outcome.scans,
         collisions,
         path_length_m: outcome.path_length_m,
+        true_path_length_m: Some(travelled),
+        geodesic_m,
+        spl: geodesic_m.map(|l| spl(reached, l, travelled)),
         final_position_error_m: fe,
         final_heading_error_deg: fh,
         ate_rmse_m: run.log.ate_rmse_m(),

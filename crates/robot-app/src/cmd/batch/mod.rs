@@ -16,9 +16,10 @@ use serde::Serialize;
 
 use self::jobs::Job;
 use self::table::{Aggregate, BatchRow, aggregate, table};
-use super::sim::{SimRun, simulate};
+use super::sim::{SimRun, geodesic_in, geodesic_map, simulate_with_geodesic};
 use crate::config::Method;
 use crate::outputs::write_atomic;
+use sim_laser::GeodesicMap;
 
 /// Arguments of `robot-app batch`.
 #[derive(Debug, Args)]
@@ -148,10 +149,36 @@ fn run_jobs(jobs: &[Job], args: &BatchArgs) -> anyhow::Result<JobResults> {
             .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
     let keep = args.keep_runs.then(|| args.out.join("runs"));
+    // One free-space grid per world and robot radius, shared by the geodesics of its runs.
+    let key = |job: &Job| {
+        (
+            std::sync::Arc::as_ptr(&job.spec.setup.world) as usize,
+            job.spec.setup.robot_radius_m.to_bits(),
+        )
+    };
+    let mut firsts: Vec<usize> = Vec::new();
+    for (i, job) in jobs.iter().enumerate() {
+        if !firsts.iter().any(|&f| key(&jobs[f]) == key(job)) {
+            firsts.push(i);
+        }
+    }
+    let maps: Vec<Option<GeodesicMap>> = pool.install(|| {
+        firsts
+            .par_iter()
+            .map(|&f| geodesic_map(&jobs[f].spec))
+            .collect()
+    });
+    let map_of = |job: &Job| {
+        firsts
+            .iter()
+            .position(|&f| key(&jobs[f]) == key(job))
+            .and_then(|i| maps[i].as_ref())
+    };
     let rows: Vec<anyhow::Result<BatchRow>> = pool.install(|| {
         jobs.par_iter()
             .map(|job| {
-                let run = simulate(&job.spec, None)?;
+                let geodesic = map_of(job).and_then(|m| geodesic_in(m, &job.spec));
+                let run = simulate_with_geodesic(&job.spec, geodesic)?;
                 if let Some(dir) = &keep {
                     let sub = dir.join(format!(
                         "{}-{}-{}-{}",
@@ -204,6 +231,9 @@ fn row_of(job: &Job, run: SimRun) -> BatchRow {
         ate_rmse_m: s.ate_rmse_m,
         goal_distance_m: s.goal_distance_m,
         path_length_m: s.path_length_m,
+        true_path_length_m: s.true_path_length_m,
+        geodesic_m: s.geodesic_m,
+        spl: s.spl,
         cpu_time_s: s.cpu_time_s,
         note: s.note,
     }

@@ -43,8 +43,14 @@ pub struct BatchRow {
     pub ate_rmse_m: Option<f64>,
     /// True distance to the target at the end, metres.
     pub goal_distance_m: Option<f64>,
-    /// Distance driven, metres.
+    /// Distance commanded, metres.
     pub path_length_m: f64,
+    /// Distance truly driven, metres.
+    pub true_path_length_m: Option<f64>,
+    /// Shortest free path from start to target, metres (`null`: none found).
+    pub geodesic_m: Option<f64>,
+    /// Success weighted by path length of the run (`null` without a geodesic).
+    pub spl: Option<f64>,
     /// CPU time, seconds.
     pub cpu_time_s: f64,
     /// How it ended.
@@ -66,6 +72,10 @@ pub struct Aggregate {
     pub reached: usize,
     /// Success rate, percent.
     pub success_pct: f64,
+    /// SPL: the mean of the runs' SPL over the runs with a geodesic (`null` if none has one).
+    pub spl: Option<f64>,
+    /// Runs with a geodesic, the ones `spl` averages.
+    pub spl_runs: usize,
     /// Runs with a collision.
     pub runs_with_collision: usize,
     /// Median final localisation error, metres.
@@ -107,6 +117,7 @@ pub fn aggregate(rows: &[BatchRow]) -> Vec<Aggregate> {
             let mut ate: Vec<f64> = sel.iter().filter_map(|r| r.ate_rmse_m).collect();
             let mut legs: Vec<f64> = sel.iter().map(|r| r.legs as f64).collect();
             let mut cpu: Vec<f64> = sel.iter().map(|r| r.cpu_time_s).collect();
+            let spls: Vec<f64> = sel.iter().filter_map(|r| r.spl).collect();
             let mut reasons = std::collections::BTreeMap::new();
             for r in &sel {
                 *reasons.entry(r.reason.to_string()).or_insert(0) += 1;
@@ -119,6 +130,8 @@ pub fn aggregate(rows: &[BatchRow]) -> Vec<Aggregate> {
                 } else {
                     100.0 * reached as f64 / runs as f64
                 },
+                spl: (!spls.is_empty()).then(|| spls.iter().sum::<f64>() / spls.len() as f64),
+                spl_runs: spls.len(),
                 runs_with_collision: sel.iter().filter(|r| r.collisions > 0).count(),
                 median_final_error_m: median(&mut fe),
                 p90_final_error_m: percentile(&mut fe, 0.9),
@@ -140,12 +153,13 @@ pub fn table(aggs: &[Aggregate]) -> String {
     let mut s = String::new();
     let _ = writeln!(
         s,
-        "{:<20} {:<8} {:<9} {:>5} {:>8} {:>6} {:>10} {:>9} {:>9} {:>6} {:>8}  reasons",
+        "{:<20} {:<8} {:<9} {:>5} {:>8} {:>6} {:>6} {:>10} {:>9} {:>9} {:>6} {:>8}  reasons",
         "group",
         "kind",
         "method",
         "runs",
         "success",
+        "SPL",
         "coll.",
         "med.err m",
         "p90 err",
@@ -157,12 +171,13 @@ pub fn table(aggs: &[Aggregate]) -> String {
         let reasons: Vec<String> = a.reasons.iter().map(|(k, v)| format!("{k}:{v}")).collect();
         let _ = writeln!(
             s,
-            "{:<20} {:<8} {:<9} {:>5} {:>7.1}% {:>6} {:>10.3} {:>9.3} {:>9.3} {:>6.0} {:>8.3}  {}",
+            "{:<20} {:<8} {:<9} {:>5} {:>7.1}% {:>6} {:>6} {:>10.3} {:>9.3} {:>9.3} {:>6.0} {:>8.3}  {}",
             a.group,
             a.kind,
             a.method,
             a.runs,
             a.success_pct,
+            a.spl.map_or_else(|| "-".into(), |v| format!("{v:.3}")),
             a.runs_with_collision,
             a.median_final_error_m,
             a.p90_final_error_m,
