@@ -311,6 +311,11 @@ impl Ros2Recorder {
         self.file.path()
     }
 
+    /// The geometry given to [`Ros2Recorder::with_geometry`].
+    pub fn geometry(&self) -> Option<ScanGeometry> {
+        self.geometry
+    }
+
     /// Scans recorded so far.
     pub fn scans(&self) -> u64 {
         self.seq
