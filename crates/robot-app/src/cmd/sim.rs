@@ -236,7 +236,7 @@ pub fn run(args: SimArgs) -> anyhow::Result<()> {
     args.options.write_config(&spec.config)?;
     let run = match &args.options.record {
         None => simulate(&spec, None)?,
-        Some(path) => record_run(&spec, path, args.options.profile)?,
+        Some(path) => record_run_as(&spec, path, args.options.profile)?,
     };
     let title = format!(
         "method {} — {} world, seed {}: {}",
@@ -279,10 +279,16 @@ pub fn run(args: SimArgs) -> anyhow::Result<()> {
 }
 
 /// Runs `spec` recording every scan with its true pose and the navigator's estimate to
-/// `path` (MCAP in `profile`), with the run's settings ([`scan_log::RUN_METADATA`]), the legs
-/// it drove ([`scan_log::LEGS_METADATA`]) and (ROS 2) its map, so `robot-app replay FILE
-/// --loop` can repeat it.
-pub fn record_run(
+/// `path` (goalseek's MCAP recording), with the run's settings ([`scan_log::RUN_METADATA`])
+/// and the legs it drove ([`scan_log::LEGS_METADATA`]), so `robot-app replay FILE --loop` can
+/// repeat it.
+pub fn record_run(spec: &SimSpec, path: &Path) -> anyhow::Result<SimRun> {
+    record_run_as(spec, path, crate::record::RecordProfile::Foxglove)
+}
+
+/// Runs `spec` recording it as [`record_run`] does in `profile` (ROS 2: with the map at the
+/// end).
+pub fn record_run_as(
     spec: &SimSpec,
     path: &Path,
     profile: crate::record::RecordProfile,
