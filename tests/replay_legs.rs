@@ -60,6 +60,7 @@ fn replay_args(file: std::path::PathBuf) -> ReplayArgs {
         count: None,
         format: ScanFormat::Csv,
         record: None,
+        profile: Default::default(),
         through_loop: true,
         out: None,
     }

@@ -1,53 +1,172 @@
-//! MCAP recording for `robot-app scan --record FILE` and `robot-app sim --record FILE`, and
-//! opening recordings and other logs for replay.
+//! MCAP recording for `--record FILE` (`sim`, `run`, `scan`, `replay`) in goalseek's Foxglove
+//! profile or as ROS 2 messages (`--profile ros2`), and opening recordings and other logs for
+//! replay.
 //!
 //! The file is written as `FILE.partial` and renamed to `FILE` when the recording finishes
 //! (or when the [`Recorder`] is dropped); see `docs/logs.md`.
 
+use std::collections::BTreeMap;
 use std::path::Path;
 
 use anyhow::Context;
+use localiser::{CellState, OccupancyGrid};
 use robot_base::{Command, LoggingBase, NoMotion};
-use scan_log::{GeometryOverride, LogError, LogSource, McapRecorder, RecordedLaser, RunLog};
-use scan_types::{Pose2, ScanGeometry, WorldPoint};
+use scan_log::{
+    GeometryOverride, LogError, LogSource, McapRecorder, RecordedLaser, Ros2Map, Ros2Recorder,
+    RunLog,
+};
+use scan_types::{Pose2, Scan, ScanGeometry, WorldPoint};
 
 use crate::config::Params;
 use crate::runloop::{LoopRun, run_loop};
 
-/// A goalseek MCAP recording ([`McapRecorder`], whose methods it has) that also takes the legs
-/// of a run.
-pub struct Recorder(McapRecorder);
+/// What a `--record` file holds.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum RecordProfile {
+    /// goalseek's recording: Foxglove JSON messages with the exact scans, replayable.
+    #[default]
+    Foxglove,
+    /// ROS 2 messages (CDR) that `ros2 bag`, rosbags and Foxglove open: scans, poses, `/tf`
+    /// and the map at the end.
+    Ros2,
+}
+
+/// An MCAP recording of scans, poses, the settings and legs of a run, and its map, in one of
+/// the [`RecordProfile`]s.
+pub enum Recorder {
+    /// [`RecordProfile::Foxglove`].
+    Foxglove(McapRecorder),
+    /// [`RecordProfile::Ros2`].
+    Ros2(Ros2Recorder),
+}
 
 impl Recorder {
-    /// Starts recording to `path`; `geometry` is the one of [`McapRecorder::write`].
+    /// Starts a goalseek (Foxglove) recording to `path`; `geometry` is the one of
+    /// [`Recorder::write`].
     pub fn create(path: &Path, geometry: &ScanGeometry) -> Result<Recorder, LogError> {
-        Ok(Recorder(
-            McapRecorder::create(path)?.with_geometry(geometry),
-        ))
+        Self::create_profile(path, geometry, RecordProfile::Foxglove)
+    }
+
+    /// Starts a recording to `path` in `profile`; `geometry` is the one of [`Recorder::write`].
+    pub fn create_profile(
+        path: &Path,
+        geometry: &ScanGeometry,
+        profile: RecordProfile,
+    ) -> Result<Recorder, LogError> {
+        Ok(match profile {
+            RecordProfile::Foxglove => {
+                Recorder::Foxglove(McapRecorder::create(path)?.with_geometry(geometry))
+            }
+            RecordProfile::Ros2 => {
+                Recorder::Ros2(Ros2Recorder::create(path)?.with_geometry(geometry))
+            }
+        })
+    }
+
+    /// Records a scan without poses.
+    pub fn write(&mut self, scan: &Scan) -> Result<(), LogError> {
+        match self {
+            Recorder::Foxglove(r) => r.write(scan),
+            Recorder::Ros2(r) => r.write(scan),
+        }
+    }
+
+    /// Records a scan of a run on a real robot with the loop's estimate (kept by the ROS 2
+    /// profile only; goalseek's recording keeps the bare scans of a real run).
+    pub fn write_estimated(&mut self, scan: &Scan, estimate: Pose2) -> Result<(), LogError> {
+        match self {
+            Recorder::Foxglove(r) => r.write(scan),
+            Recorder::Ros2(r) => {
+                let geometry = scan_geometry(r.path(), r.geometry())?;
+                r.record_scan(&geometry, scan, None, Some(estimate))
+            }
+        }
+    }
+
+    /// Records one scan with its geometry and, where known, the true and estimated poses.
+    pub fn record_scan(
+        &mut self,
+        geometry: &ScanGeometry,
+        scan: &Scan,
+        true_pose: Option<Pose2>,
+        est_pose: Option<Pose2>,
+    ) -> Result<(), LogError> {
+        match self {
+            Recorder::Foxglove(r) => r.record_scan(geometry, scan, true_pose, est_pose),
+            Recorder::Ros2(r) => r.record_scan(geometry, scan, true_pose, est_pose),
+        }
+    }
+
+    /// Writes an MCAP metadata record (e.g. [`scan_log::RUN_METADATA`]).
+    pub fn write_metadata(
+        &mut self,
+        name: &str,
+        values: &BTreeMap<String, String>,
+    ) -> Result<(), LogError> {
+        match self {
+            Recorder::Foxglove(r) => r.write_metadata(name, values),
+            Recorder::Ros2(r) => r.write_metadata(name, values),
+        }
     }
 
     /// Writes the legs of a finished run ([`scan_log::LEGS_METADATA`]).
     pub fn write_legs(&mut self, log: &RunLog, reason: &str) -> Result<(), LogError> {
-        self.0.write_legs(&log.leg_summaries(), reason)
+        let values = scan_log::legs_metadata(&log.leg_summaries(), reason);
+        self.write_metadata(scan_log::LEGS_METADATA, &values)
+    }
+
+    /// Records the run's map on `/map` (ROS 2 profile; goalseek's recording has no map). An
+    /// empty map is left out.
+    pub fn write_map(&mut self, grid: &OccupancyGrid) -> Result<(), LogError> {
+        match self {
+            Recorder::Foxglove(_) => Ok(()),
+            Recorder::Ros2(r) => match ros2_map(grid) {
+                Some(map) => r.write_map(&map),
+                None => Ok(()),
+            },
+        }
     }
 
     /// Closes the file and moves it to its final name; returns the number of scans.
     pub fn finish(self) -> Result<u64, LogError> {
-        self.0.finish()
+        match self {
+            Recorder::Foxglove(r) => r.finish(),
+            Recorder::Ros2(r) => r.finish(),
+        }
     }
 }
 
-impl std::ops::Deref for Recorder {
-    type Target = McapRecorder;
-    fn deref(&self) -> &McapRecorder {
-        &self.0
-    }
+/// The geometry a recorder was created with.
+fn scan_geometry(path: &Path, geometry: Option<ScanGeometry>) -> Result<ScanGeometry, LogError> {
+    geometry.ok_or_else(|| LogError::NoGeometry {
+        path: path.to_path_buf(),
+    })
 }
 
-impl std::ops::DerefMut for Recorder {
-    fn deref_mut(&mut self) -> &mut McapRecorder {
-        &mut self.0
+/// The grid as ROS map_server publishes its `map.yaml` (`mode: trinary`): occupied 100, free 0,
+/// unknown -1, rows from the lowest y; `None` for an empty grid.
+pub fn ros2_map(grid: &OccupancyGrid) -> Option<Ros2Map> {
+    if grid.width() == 0 || grid.height() == 0 {
+        return None;
     }
+    let mut cells = Vec::with_capacity(grid.width() * grid.height());
+    for row in 0..grid.height() {
+        for col in 0..grid.width() {
+            cells.push(match grid.cell_state(col, row) {
+                CellState::Occupied => 100,
+                CellState::Free => 0,
+                CellState::Unknown => -1,
+            });
+        }
+    }
+    let origin = grid.origin();
+    Some(Ros2Map {
+        resolution_m: grid.resolution_m(),
+        width: u32::try_from(grid.width()).ok()?,
+        height: u32::try_from(grid.height()).ok()?,
+        origin_m: (origin.x_m(), origin.y_m()),
+        cells,
+    })
 }
 
 /// Opens a log (CARMEN, BreezySLAM, goalseek MCAP), with an optional sensor preset name

@@ -30,6 +30,7 @@ fn replay_args(file: PathBuf, topic: Option<&str>) -> ReplayArgs {
         count: None,
         format: ScanFormat::Csv,
         record: None,
+        profile: Default::default(),
         through_loop: false,
         out: None,
     }
@@ -99,6 +100,7 @@ fn the_emulator_serves_a_bag_topic() {
         seed: 0,
         noise: Noise::Off,
         record: None,
+        profile: Default::default(),
     };
     scan::run_to(&args, &mut out).unwrap();
     let (g, scan) = read_scan_csv(&out[..], "scan output").unwrap();

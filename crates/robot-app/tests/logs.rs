@@ -20,6 +20,7 @@ fn replay_args(file: PathBuf) -> ReplayArgs {
         count: None,
         format: ScanFormat::Csv,
         record: None,
+        profile: Default::default(),
         through_loop: false,
         out: None,
     }
@@ -75,6 +76,7 @@ fn scan_record_then_replay_prints_the_same_csv() {
         seed: 4,
         noise: Noise::On,
         record: Some(rec.clone()),
+        profile: Default::default(),
     };
     let mut live = Vec::new();
     scan::run_to(&args, &mut live).unwrap();
@@ -135,6 +137,7 @@ fn emulate_source_serves_a_recording_over_scip() {
         seed: 0,
         noise: Noise::Off,
         record: None,
+        profile: Default::default(),
     };
     scan::run_to(&args, &mut out).unwrap();
     for (gg, got) in blocks(&out) {

@@ -20,6 +20,7 @@ fn scan_args(port: Option<String>, format: ScanFormat, count: usize) -> ScanArgs
         seed: 0,
         noise: Noise::Off,
         record: None,
+        profile: Default::default(),
     }
 }
 

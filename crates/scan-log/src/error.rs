@@ -168,6 +168,19 @@ pub enum LogError {
         /// The file.
         path: PathBuf,
     },
+    /// A map given to [`crate::Ros2Recorder::write_map`] has another number of cells than
+    /// its width and height say.
+    #[error("{}: a map of {width} x {height} cells with {cells} values", path.display())]
+    MapSize {
+        /// The recording.
+        path: PathBuf,
+        /// Cells per row.
+        width: u32,
+        /// Rows.
+        height: u32,
+        /// Values given.
+        cells: usize,
+    },
     /// The recorder was used after `finish`.
     #[error("{}: the recording is already finished", path.display())]
     Finished {

@@ -9,6 +9,8 @@
 //!   exposes the recorded pose of the last scan ([`LogSource::pose`]).
 //! - [`McapRecorder`]: writes scans and poses to an MCAP file that Foxglove opens as it is,
 //!   atomically (temp file + rename); [`read_mcap`] reads it back bit for bit.
+//! - [`Ros2Recorder`]: writes scans, poses, transforms and the map as ROS 2 messages (CDR,
+//!   MCAP profile `ros2`) that ROS 2 tools open, atomically too.
 //! - [`open_log`], [`LoopingLog`], [`RecordedLaser`]: a log played back as a laser, with a
 //!   geometry override, looping at its end, or with its recorded true poses.
 //! - [`write_scan_csv`], [`read_scan_csv`], [`scan_json`], [`record_json`]: one scan as the CSV
@@ -42,6 +44,7 @@ mod foreign;
 mod mcap_io;
 mod playback;
 mod record;
+mod ros2_writer;
 mod run_log;
 mod run_meta;
 mod source;
@@ -67,6 +70,11 @@ pub use playback::{
     GeometryOverride, LoopingLog, RecordedLaser, RecordedTruth, open_log, open_log_topic,
 };
 pub use record::LogRecord;
+pub use ros2_writer::{
+    ROS2_BASE_FRAME, ROS2_MAP_FRAME, ROS2_MAP_TOPIC, ROS2_OCCUPANCY_GRID, ROS2_POSE_ESTIMATE_TOPIC,
+    ROS2_POSE_STAMPED, ROS2_POSE_TRUTH_TOPIC, ROS2_TF_MESSAGE, ROS2_TF_TOPIC, Ros2Map,
+    Ros2Recorder, ros2_schema,
+};
 pub use run_log::{LegRecord, RunLog, trajectory_csv, tum, write_trajectory};
 pub use run_meta::{
     LEGS_METADATA, LegSummary, RUN_METADATA, RunSettings, leg_difference, legs_metadata,

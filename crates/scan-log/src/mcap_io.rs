@@ -92,10 +92,11 @@ pub fn recording_schemas() -> [(&'static str, String); 2] {
     ]
 }
 
+/// A time stamp: whole seconds and nanoseconds.
 #[derive(Serialize, Deserialize)]
-struct Time {
-    sec: u64,
-    nsec: u32,
+pub(crate) struct Time {
+    pub(crate) sec: u64,
+    pub(crate) nsec: u32,
 }
 
 #[derive(Serialize, Deserialize)]
@@ -183,7 +184,9 @@ struct PoseMsg {
     goalseek: PoseExtra,
 }
 
-fn time_of(host_time_s: f64) -> (Time, u64) {
+/// The stamp of a host time in seconds (0 for a negative or non-finite time), and in
+/// nanoseconds.
+pub(crate) fn time_of(host_time_s: f64) -> (Time, u64) {
     let t = if host_time_s.is_finite() && host_time_s > 0.0 {
         host_time_s
     } else {
@@ -204,183 +207,78 @@ fn time_of(host_time_s: f64) -> (Time, u64) {
     )
 }
 
-/// Writes a goalseek MCAP recording, atomically.
-///
-/// The file is written as `<path>.partial` in the same directory and renamed to `path` by
-/// [`McapRecorder::finish`]. Every scan ends an MCAP chunk and is flushed, so if the process
-/// dies, `<path>.partial` holds every scan recorded so far and [`read_mcap`] reads them (it
-/// reports the cut as an error after the last whole scan). Dropping the recorder without
-/// `finish` (an error or panic unwinding) finishes and renames the file as `finish` would.
-pub struct McapRecorder {
+/// An MCAP file written as `<path>.partial` and renamed to its final name when finished.
+pub(crate) struct PartialMcap {
     writer: Option<mcap::Writer<BufWriter<File>>>,
     tmp_path: PathBuf,
     path: PathBuf,
-    scan_ch: u16,
-    true_ch: u16,
-    est_ch: u16,
-    seq: u64,
-    geometry: Option<ScanGeometry>,
 }
 
-/// The temporary name a recording has until it is finished.
-pub fn partial_path(path: &Path) -> PathBuf {
-    let mut name = path.file_name().unwrap_or_default().to_os_string();
-    name.push(".partial");
-    path.with_file_name(name)
-}
-
-impl McapRecorder {
-    /// Starts a recording that will be at `path` once finished.
-    pub fn create(path: &Path) -> Result<Self, LogError> {
+impl PartialMcap {
+    /// Starts `<path>.partial` with the MCAP `profile` (uncompressed chunks).
+    pub(crate) fn create(path: &Path, profile: &str) -> Result<Self, LogError> {
         let tmp_path = partial_path(path);
-        let io = |source| LogError::Io {
+        let file = File::create(&tmp_path).map_err(|source| LogError::Io {
             path: tmp_path.clone(),
             source,
-        };
-        let file = File::create(&tmp_path).map_err(io)?;
-        let mcap_err = |source| LogError::Mcap {
-            path: tmp_path.clone(),
-            source,
-        };
-        let mut writer = mcap::WriteOptions::new()
+        })?;
+        let writer = mcap::WriteOptions::new()
             .compression(None)
-            .profile("")
+            .profile(profile)
             .create(BufWriter::new(file))
-            .map_err(mcap_err)?;
-        let scan_schema = writer
-            .add_schema(
-                "foxglove.LaserScan",
-                "jsonschema",
-                laser_scan_schema().as_bytes(),
-            )
-            .map_err(mcap_err)?;
-        let pose_schema = writer
-            .add_schema(
-                "foxglove.PoseInFrame",
-                "jsonschema",
-                pose_schema().as_bytes(),
-            )
-            .map_err(mcap_err)?;
-        let meta = BTreeMap::new();
-        let scan_ch = writer
-            .add_channel(scan_schema, SCAN_TOPIC, "json", &meta)
-            .map_err(mcap_err)?;
-        let true_ch = writer
-            .add_channel(pose_schema, TRUE_POSE_TOPIC, "json", &meta)
-            .map_err(mcap_err)?;
-        let est_ch = writer
-            .add_channel(pose_schema, EST_POSE_TOPIC, "json", &meta)
-            .map_err(mcap_err)?;
+            .map_err(|source| LogError::Mcap {
+                path: tmp_path.clone(),
+                source,
+            })?;
         tracing::info!("recording to {}", path.display());
         Ok(Self {
             writer: Some(writer),
             tmp_path,
             path: path.to_path_buf(),
-            scan_ch,
-            true_ch,
-            est_ch,
-            seq: 0,
-            geometry: None,
         })
     }
 
-    /// Sets the geometry of the scans [`McapRecorder::write`] records.
-    pub fn with_geometry(mut self, geometry: &ScanGeometry) -> Self {
-        self.geometry = Some(*geometry);
-        self
-    }
-
-    /// Records a scan without poses, of the geometry given to [`McapRecorder::with_geometry`].
-    pub fn write(&mut self, scan: &Scan) -> Result<(), LogError> {
-        let geometry = self.geometry.ok_or_else(|| LogError::NoGeometry {
-            path: self.path.clone(),
-        })?;
-        self.record_scan(&geometry, scan, None, None)
-    }
-
-    /// The final path of the recording.
-    pub fn path(&self) -> &Path {
+    /// The final path.
+    pub(crate) fn path(&self) -> &Path {
         &self.path
     }
 
-    /// Scans recorded so far.
-    pub fn scans(&self) -> u64 {
-        self.seq
+    /// True until the file is finished.
+    pub(crate) fn is_open(&self) -> bool {
+        self.writer.is_some()
     }
 
-    /// Records one scan with its geometry and, where known, the true and estimated poses.
-    ///
-    /// In Foxglove the scan is drawn in frame `world` at the estimated pose (else the true
-    /// pose) when one is given, and in frame `laser` otherwise.
-    pub fn record_scan(
+    /// Runs `f` on the open writer, its MCAP errors naming the temporary file.
+    pub(crate) fn with<T>(
         &mut self,
-        geometry: &ScanGeometry,
-        scan: &Scan,
-        true_pose: Option<Pose2>,
-        est_pose: Option<Pose2>,
-    ) -> Result<(), LogError> {
-        let tmp = self.tmp_path.clone();
+        f: impl FnOnce(&mut mcap::Writer<BufWriter<File>>) -> Result<T, mcap::McapError>,
+    ) -> Result<T, LogError> {
         let writer = self.writer.as_mut().ok_or_else(|| LogError::Finished {
             path: self.path.clone(),
         })?;
-        let mcap_err = |source| LogError::Mcap {
-            path: tmp.clone(),
+        f(writer).map_err(|source| LogError::Mcap {
+            path: self.tmp_path.clone(),
             source,
-        };
-        let seq = self.seq;
-        let (stamp, ns) = time_of(scan.host_time_s);
-        let msg = laser_scan_msg(geometry, scan, seq, &stamp, est_pose.or(true_pose));
-        let data = serde_json::to_vec(&msg).expect("plain data serialises");
-        let header = |channel_id| mcap::records::MessageHeader {
-            channel_id,
-            sequence: seq as u32,
-            log_time: ns,
-            publish_time: ns,
-        };
-        writer
-            .write_to_known_channel(&header(self.scan_ch), &data)
-            .map_err(mcap_err)?;
-        for (ch, pose) in [(self.true_ch, true_pose), (self.est_ch, est_pose)] {
-            let Some(p) = pose else { continue };
-            let msg = pose_msg(p, seq, &stamp);
-            let data = serde_json::to_vec(&msg).expect("plain data serialises");
-            writer
-                .write_to_known_channel(&header(ch), &data)
-                .map_err(mcap_err)?;
-        }
-        // End the chunk so a crash keeps every scan recorded so far.
-        writer.flush().map_err(mcap_err)?;
-        self.seq += 1;
-        Ok(())
+        })
     }
 
-    /// Writes an MCAP metadata record: a name and string pairs (e.g. the settings of a run).
-    pub fn write_metadata(
+    /// Writes an MCAP metadata record.
+    pub(crate) fn write_metadata(
         &mut self,
         name: &str,
         values: &BTreeMap<String, String>,
     ) -> Result<(), LogError> {
-        let tmp = self.tmp_path.clone();
-        let writer = self.writer.as_mut().ok_or_else(|| LogError::Finished {
-            path: self.path.clone(),
-        })?;
         let record = mcap::records::Metadata {
             name: name.to_string(),
             metadata: values.clone(),
         };
-        writer
-            .write_metadata(&record)
-            .map_err(|source| LogError::Mcap { path: tmp, source })
+        self.with(|w| w.write_metadata(&record))
     }
 
-    /// Writes the MCAP summary and moves the file to its final name; returns the scan count.
-    pub fn finish(mut self) -> Result<u64, LogError> {
-        self.finish_inner()
-    }
-
-    fn finish_inner(&mut self) -> Result<u64, LogError> {
+    /// Writes the summary, syncs and renames the file; nothing when already finished.
+    pub(crate) fn finish(&mut self) -> Result<(), LogError> {
         let Some(mut writer) = self.writer.take() else {
-            return Ok(self.seq);
+            return Ok(());
         };
         let tmp = self.tmp_path.clone();
         writer.finish().map_err(|source| LogError::Mcap {
@@ -399,8 +297,146 @@ impl McapRecorder {
         std::fs::rename(&tmp, &self.path).map_err(|source| LogError::Io {
             path: self.path.clone(),
             source,
+        })
+    }
+}
+
+/// Writes a goalseek MCAP recording, atomically.
+///
+/// The file is written as `<path>.partial` in the same directory and renamed to `path` by
+/// [`McapRecorder::finish`]. Every scan ends an MCAP chunk and is flushed, so if the process
+/// dies, `<path>.partial` holds every scan recorded so far and [`read_mcap`] reads them (it
+/// reports the cut as an error after the last whole scan). Dropping the recorder without
+/// `finish` (an error or panic unwinding) finishes and renames the file as `finish` would.
+pub struct McapRecorder {
+    file: PartialMcap,
+    scan_ch: u16,
+    true_ch: u16,
+    est_ch: u16,
+    seq: u64,
+    geometry: Option<ScanGeometry>,
+}
+
+/// The temporary name a recording has until it is finished.
+pub fn partial_path(path: &Path) -> PathBuf {
+    let mut name = path.file_name().unwrap_or_default().to_os_string();
+    name.push(".partial");
+    path.with_file_name(name)
+}
+
+impl McapRecorder {
+    /// Starts a recording that will be at `path` once finished.
+    pub fn create(path: &Path) -> Result<Self, LogError> {
+        let mut file = PartialMcap::create(path, "")?;
+        let (scan_ch, true_ch, est_ch) = file.with(|writer| {
+            let scan_schema = writer.add_schema(
+                "foxglove.LaserScan",
+                "jsonschema",
+                laser_scan_schema().as_bytes(),
+            )?;
+            let pose_schema = writer.add_schema(
+                "foxglove.PoseInFrame",
+                "jsonschema",
+                pose_schema().as_bytes(),
+            )?;
+            let meta = BTreeMap::new();
+            Ok((
+                writer.add_channel(scan_schema, SCAN_TOPIC, "json", &meta)?,
+                writer.add_channel(pose_schema, TRUE_POSE_TOPIC, "json", &meta)?,
+                writer.add_channel(pose_schema, EST_POSE_TOPIC, "json", &meta)?,
+            ))
         })?;
-        tracing::info!("recorded {} scans to {}", self.seq, self.path.display());
+        Ok(Self {
+            file,
+            scan_ch,
+            true_ch,
+            est_ch,
+            seq: 0,
+            geometry: None,
+        })
+    }
+
+    /// Sets the geometry of the scans [`McapRecorder::write`] records.
+    pub fn with_geometry(mut self, geometry: &ScanGeometry) -> Self {
+        self.geometry = Some(*geometry);
+        self
+    }
+
+    /// Records a scan without poses, of the geometry given to [`McapRecorder::with_geometry`].
+    pub fn write(&mut self, scan: &Scan) -> Result<(), LogError> {
+        let geometry = self.geometry.ok_or_else(|| LogError::NoGeometry {
+            path: self.file.path().to_path_buf(),
+        })?;
+        self.record_scan(&geometry, scan, None, None)
+    }
+
+    /// The final path of the recording.
+    pub fn path(&self) -> &Path {
+        self.file.path()
+    }
+
+    /// Scans recorded so far.
+    pub fn scans(&self) -> u64 {
+        self.seq
+    }
+
+    /// Records one scan with its geometry and, where known, the true and estimated poses.
+    ///
+    /// In Foxglove the scan is drawn in frame `world` at the estimated pose (else the true
+    /// pose) when one is given, and in frame `laser` otherwise.
+    pub fn record_scan(
+        &mut self,
+        geometry: &ScanGeometry,
+        scan: &Scan,
+        true_pose: Option<Pose2>,
+        est_pose: Option<Pose2>,
+    ) -> Result<(), LogError> {
+        let seq = self.seq;
+        let (stamp, ns) = time_of(scan.host_time_s);
+        let msg = laser_scan_msg(geometry, scan, seq, &stamp, est_pose.or(true_pose));
+        let data = serde_json::to_vec(&msg).expect("plain data serialises");
+        let header = |channel_id| mcap::records::MessageHeader {
+            channel_id,
+            sequence: seq as u32,
+            log_time: ns,
+            publish_time: ns,
+        };
+        let mut messages = vec![(self.scan_ch, data)];
+        for (ch, pose) in [(self.true_ch, true_pose), (self.est_ch, est_pose)] {
+            let Some(p) = pose else { continue };
+            let msg = pose_msg(p, seq, &stamp);
+            messages.push((ch, serde_json::to_vec(&msg).expect("plain data serialises")));
+        }
+        self.file.with(|writer| {
+            for (ch, data) in &messages {
+                writer.write_to_known_channel(&header(*ch), data)?;
+            }
+            // End the chunk so a crash keeps every scan recorded so far.
+            writer.flush()
+        })?;
+        self.seq += 1;
+        Ok(())
+    }
+
+    /// Writes an MCAP metadata record: a name and string pairs (e.g. the settings of a run).
+    pub fn write_metadata(
+        &mut self,
+        name: &str,
+        values: &BTreeMap<String, String>,
+    ) -> Result<(), LogError> {
+        self.file.write_metadata(name, values)
+    }
+
+    /// Writes the MCAP summary and moves the file to its final name; returns the scan count.
+    pub fn finish(mut self) -> Result<u64, LogError> {
+        self.finish_inner()
+    }
+
+    fn finish_inner(&mut self) -> Result<u64, LogError> {
+        if self.file.is_open() {
+            self.file.finish()?;
+            tracing::info!("recorded {} scans to {}", self.seq, self.path().display());
+        }
         Ok(self.seq)
     }
 }
@@ -475,11 +511,11 @@ fn pose_msg(p: Pose2, seq: u64, stamp: &Time) -> PoseMsg {
 
 impl Drop for McapRecorder {
     fn drop(&mut self) {
-        if self.writer.is_some() {
+        if self.file.is_open() {
             match self.finish_inner() {
                 Ok(n) => tracing::warn!(
                     "recording {} dropped without finish: closed it with {n} scans",
-                    self.path.display()
+                    self.path().display()
                 ),
                 Err(e) => {
                     tracing::error!("recording dropped without finish and could not be closed: {e}")

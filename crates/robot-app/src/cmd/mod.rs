@@ -36,6 +36,10 @@ pub struct LoopOptions {
     /// true and estimated poses, and `robot-app replay FILE --loop` repeats the run from it.
     #[arg(long, value_name = "FILE")]
     pub record: Option<PathBuf>,
+    /// What --record writes: foxglove (goalseek's replayable recording) or ros2 (ROS 2
+    /// messages: /scan, poses, /tf and /map, for ros2 bag, rosbags, Foxglove).
+    #[arg(long, value_enum, default_value = "foxglove", requires = "record")]
+    pub profile: crate::record::RecordProfile,
 }
 
 impl LoopOptions {

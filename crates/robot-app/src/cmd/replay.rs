@@ -36,6 +36,9 @@ pub struct ReplayArgs {
     /// Also write the scans (with the log's poses) to this goalseek MCAP file.
     #[arg(long)]
     pub record: Option<PathBuf>,
+    /// What --record writes: foxglove (goalseek's recording) or ros2 (ROS 2 messages).
+    #[arg(long, value_enum, default_value = "foxglove", requires = "record")]
+    pub profile: crate::record::RecordProfile,
     /// Feed the scans of a `robot-app sim --record` recording to the goal-seeking loop (with
     /// the recorded settings and a base that executes nothing) and compare its legs with the
     /// recorded ones.
@@ -61,7 +64,11 @@ pub fn run_to<W: Write>(args: &ReplayArgs, out: &mut W) -> anyhow::Result<()> {
         crate::record::open_log_topic(&args.file, args.sensor.as_deref(), args.topic.as_deref())?;
     let geometry = *source.geometry();
     let mut recorder = match &args.record {
-        Some(p) => Some(crate::record::Recorder::create(p, &geometry)?),
+        Some(p) => Some(crate::record::Recorder::create_profile(
+            p,
+            &geometry,
+            args.profile,
+        )?),
         None => None,
     };
     let started = Instant::now();

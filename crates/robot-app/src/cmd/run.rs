@@ -58,15 +58,15 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
         .record
         .as_deref()
         .map(|p| {
-            crate::record::Recorder::create(p, &geometry)
+            crate::record::Recorder::create_profile(p, &geometry, args.options.profile)
                 .with_context(|| format!("cannot record to {}", p.display()))
         })
         .transpose()?;
     let mut record_error: Option<String> = None;
-    let mut hook = |scan: &Scan, _: &Pose2| {
+    let mut hook = |scan: &Scan, estimate: &Pose2| {
         if let Some(r) = recorder.as_mut()
             && record_error.is_none()
-            && let Err(e) = r.write(scan)
+            && let Err(e) = r.write_estimated(scan, *estimate)
         {
             record_error = Some(e.to_string());
         }
@@ -86,7 +86,12 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
     if let Some(urg) = laser.urg_mut() {
         let _ = urg.stop();
     }
-    if let Some(r) = recorder {
+    if let Some(mut r) = recorder {
+        if record_error.is_none()
+            && let Err(e) = r.write_map(&outcome.grid)
+        {
+            record_error = Some(e.to_string());
+        }
         r.finish().context("finishing the recording")?;
     }
     let summary = summary_of(&outcome, &config, (start, goal), cpu);

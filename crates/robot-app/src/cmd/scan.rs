@@ -55,6 +55,10 @@ pub struct ScanArgs {
     /// Also record every scan to this file (MCAP).
     #[arg(long)]
     pub record: Option<PathBuf>,
+    /// What --record writes: foxglove (goalseek's recording) or ros2 (sensor_msgs/LaserScan
+    /// on /scan).
+    #[arg(long, value_enum, default_value = "foxglove", requires = "record")]
+    pub profile: crate::record::RecordProfile,
 }
 
 /// Runs `robot-app scan`, printing to stdout.
@@ -139,7 +143,9 @@ fn print_scans<S: LaserSource, W: Write>(
             if let Some(path) = &args.record {
                 let r = match &mut recorder {
                     Some(r) => r,
-                    None => recorder.insert(Recorder::create(path, &geometry)?),
+                    None => {
+                        recorder.insert(Recorder::create_profile(path, &geometry, args.profile)?)
+                    }
                 };
                 r.write(&scan)?;
             }

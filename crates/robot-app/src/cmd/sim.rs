@@ -277,7 +277,7 @@ pub fn run(args: SimArgs) -> anyhow::Result<()> {
     args.options.write_config(&spec.config)?;
     let run = match &args.options.record {
         None => simulate(&spec, None)?,
-        Some(path) => record_run(&spec, path)?,
+        Some(path) => record_run_as(&spec, path, args.options.profile)?,
     };
     let title = format!(
         "method {} — {} world, seed {}: {}",
@@ -320,12 +320,23 @@ pub fn run(args: SimArgs) -> anyhow::Result<()> {
 }
 
 /// Runs `spec` recording every scan with its true pose and the navigator's estimate to
-/// `path` (MCAP), with the run's settings ([`scan_log::RUN_METADATA`]) and the legs it
-/// drove ([`scan_log::LEGS_METADATA`]), so `robot-app replay FILE --loop` can repeat it.
+/// `path` (goalseek's MCAP recording), with the run's settings ([`scan_log::RUN_METADATA`])
+/// and the legs it drove ([`scan_log::LEGS_METADATA`]), so `robot-app replay FILE --loop` can
+/// repeat it.
 pub fn record_run(spec: &SimSpec, path: &Path) -> anyhow::Result<SimRun> {
+    record_run_as(spec, path, crate::record::RecordProfile::Foxglove)
+}
+
+/// Runs `spec` recording it as [`record_run`] does in `profile` (ROS 2: with the map at the
+/// end).
+pub fn record_run_as(
+    spec: &SimSpec,
+    path: &Path,
+    profile: crate::record::RecordProfile,
+) -> anyhow::Result<SimRun> {
     let setup = &spec.setup;
     let geometry = setup.sensor.geometry();
-    let mut recorder = crate::record::Recorder::create(path, &geometry)
+    let mut recorder = crate::record::Recorder::create_profile(path, &geometry, profile)
         .with_context(|| format!("cannot record to {}", path.display()))?;
     let settings = crate::record::RunSettings {
         start: setup.start,
@@ -350,6 +361,7 @@ pub fn record_run(spec: &SimSpec, path: &Path) -> anyhow::Result<SimRun> {
         return Err(e);
     }
     recorder.write_legs(&run.log, &run.outcome.reason.to_string())?;
+    recorder.write_map(&run.outcome.grid)?;
     recorder
         .finish()
         .with_context(|| format!("finishing {}", path.display()))?;
