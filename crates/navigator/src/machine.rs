@@ -632,7 +632,7 @@ impl Navigator {
             })
             .collect();
         let chosen = select(&usable, &self.select_params);
-        if let Some(spot) = narrow {
+        if let Some(spot) = narrow.filter(|s| s.through) {
             let passage = NarrowPassage {
                 leg: self.legs + 1,
                 at: spot.at,

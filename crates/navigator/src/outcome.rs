@@ -84,7 +84,8 @@ pub struct Outcome {
     pub grid: OccupancyGrid,
     /// The first leg's landmark and point B, world frame.
     pub first_leg: Option<(WorldPoint, WorldPoint)>,
-    /// Every narrow passage a leg was planned through (graded clearance).
+    /// Every narrow passage a leg was planned through (graded clearance; legs that only
+    /// approach one are not listed).
     pub narrow_passages: Vec<NarrowPassage>,
 }
 

@@ -216,6 +216,9 @@ pub struct NarrowSpot {
     pub clearance_m: f64,
     /// The passage's narrowest width across the leg, metres.
     pub width_m: f64,
+    /// True when the leg passes through the passage's narrowest cross-section (false: it
+    /// only approaches it, inside the full margin).
+    pub through: bool,
 }
 
 /// A ranked candidate leg: score, ray, travel, and whether it uses the narrow clearance.
@@ -658,6 +661,7 @@ impl Planner {
             at: WorldPoint::new(0.0, 0.0),
             clearance_m: f64::INFINITY,
             width_m: f64::INFINITY,
+            through: false,
         };
         let mut mid = [0.0; 2];
         let mut narrowest_at = 0.0;
@@ -694,8 +698,8 @@ impl Planner {
             cost += w * f64::from(map::BAND_FACTOR - 1) * step;
         }
         // Only a leg whose narrowest cross-section lies inside it passes through.
-        let through = narrowest_at > step / 2.0 && narrowest_at < travel - step / 2.0;
-        (cost, spot, through.then_some(mid))
+        spot.through = narrowest_at > step / 2.0 && narrowest_at < travel - step / 2.0;
+        (cost, spot, spot.through.then_some(mid))
     }
 
     /// `Plan::Go` along a candidate when its leg, cut by the remembered obstacles, is still
