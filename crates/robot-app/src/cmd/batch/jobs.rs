@@ -108,10 +108,10 @@ fn worlds(args: &BatchArgs, configs: &[Params]) -> anyhow::Result<Vec<WorldEntry
             let p = Path::new(w);
             let setup = SimSetup::load(Some(p))
                 .with_context(|| format!("cannot load world {}", p.display()))?;
-            // A goalseek world file's own start and target, when it has them.
-            let has_own = p
-                .extension()
-                .is_some_and(|e| e.eq_ignore_ascii_case("toml"));
+            // A goalseek world file's own start and target, when it has them and they run.
+            let has_own = args.scenarios != "pairs"
+                && p.extension()
+                    .is_some_and(|e| e.eq_ignore_ascii_case("toml"));
             let scenario = if has_own {
                 let (start, goal) = sim_laser::file_scenario(Some(p))
                     .with_context(|| format!("reading the scenario of {}", p.display()))?;
