@@ -197,6 +197,8 @@ pub enum Plan {
     },
 }
 
+/// A passage measured this much wider than the full margin needs is never taken narrow, metres.
+const WIDE_ALLOWANCE_M: f64 = 0.1;
 /// Range noise allowed for when a passage's width is measured on one scan, metres.
 const WIDTH_ALLOWANCE_M: f64 = 0.02;
 /// How much shorter (path cost) a way through narrow passages must be than the way with the
@@ -569,7 +571,9 @@ impl Planner {
             let (band, spot, mid) = self.band_cost(dirs[i], travel);
             // A passage between obstacles on both sides (not a stretch along one wall), wide
             // enough.
-            if !spot.width_m.is_finite() {
+            // A wider passage takes the full margin: the narrow one is not for cutting corners.
+            let p = &self.params;
+            if !(spot.width_m < 2.0 * (p.robot_radius_m + p.margin_m) + WIDE_ALLOWANCE_M) {
                 continue;
             }
             if let Some(mid) = mid {
