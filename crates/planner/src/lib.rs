@@ -573,7 +573,8 @@ impl Planner {
             // enough.
             // A wider passage takes the full margin: the narrow one is not for cutting corners.
             let p = &self.params;
-            if !(spot.width_m < 2.0 * (p.robot_radius_m + p.margin_m) + WIDE_ALLOWANCE_M) {
+            let widest = 2.0 * (p.robot_radius_m + p.margin_m) + WIDE_ALLOWANCE_M;
+            if !spot.width_m.is_finite() || spot.width_m >= widest {
                 continue;
             }
             if let Some(mid) = mid {
