@@ -223,13 +223,14 @@ pub struct NarrowSpot {
     pub through: bool,
 }
 
-/// A ranked candidate leg: score, ray, travel, and whether it uses the narrow clearance.
+/// A ranked candidate leg: score, ray, travel, and for a narrow leg its tightest spot (robot
+/// frame, as `band_cost` gives it).
 #[derive(Debug, Clone, Copy)]
 struct Candidate {
     score: f64,
     ray: usize,
     travel: f64,
-    narrow: bool,
+    narrow: Option<NarrowSpot>,
 }
 
 /// Chooses rays toward a target; remembers obstacles for [`PlanRule::MapPath`].
@@ -525,7 +526,7 @@ impl Planner {
                 score,
                 ray: i,
                 travel,
-                narrow: false,
+                narrow: None,
             });
         }
     }
@@ -569,9 +570,8 @@ impl Planner {
                 continue;
             };
             let (band, spot, mid) = self.band_cost(dirs[i], travel);
-            // A passage between obstacles on both sides (not a stretch along one wall), wide
-            // enough.
-            // A wider passage takes the full margin: the narrow one is not for cutting corners.
+            // A passage between obstacles on both sides (not a stretch along one wall), no
+            // wider than the full margin needs: the narrow one is not for cutting corners.
             let p = &self.params;
             let widest = 2.0 * (p.robot_radius_m + p.margin_m) + WIDE_ALLOWANCE_M;
             if !spot.width_m.is_finite() || spot.width_m >= widest {
@@ -601,7 +601,7 @@ impl Planner {
                 score: to_go + band,
                 ray: i,
                 travel,
-                narrow: true,
+                narrow: Some(spot),
             });
         }
         self.judge_gaps(&too_narrow, &wide_enough);
@@ -716,13 +716,18 @@ impl Planner {
         c: Candidate,
     ) -> Option<Plan> {
         let i = c.ray;
-        let travel = self.memory_cap_m(pose, geometry.bearing_rad(i), c.travel, c.narrow);
+        let travel = self.memory_cap_m(pose, geometry.bearing_rad(i), c.travel, c.narrow.is_some());
         if !(travel >= self.params.min_travel_m && travel > 0.0) {
             return None;
         }
-        let narrow = c.narrow.then(|| {
+        let narrow = c.narrow.map(|spot| {
             let u = geometry.directions()[i];
-            let (_, spot, _) = self.band_cost(u, travel);
+            // Measured again only when the memory cut the leg short.
+            let spot = if travel == c.travel {
+                spot
+            } else {
+                self.band_cost(u, travel).1
+            };
             let along = spot.at.x_m();
             NarrowSpot {
                 at: pose.transform_point(RobotPoint::new(along * u[0], along * u[1])),
