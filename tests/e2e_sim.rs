@@ -255,3 +255,41 @@ fn a_target_beyond_the_walls_ends_as_a_failure_with_its_reason() {
     );
     assert!(s["goal_distance_m"].as_f64().unwrap() >= 2.0 - 0.3);
 }
+
+/// A run through the 0.74 m door of `sim/door_row.toml` (narrower than 2 (r + 0.1 m) = 0.8 m,
+/// so only graded clearance passes it) lists that door in summary.json's `narrow_passages`.
+#[test]
+fn a_run_through_a_narrow_door_lists_it_in_its_summary() {
+    let world = concat!(env!("CARGO_MANIFEST_DIR"), "/sim/door_row.toml");
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let argv: [&OsStr; 10] = [
+        "sim".as_ref(),
+        "--world".as_ref(),
+        world.as_ref(),
+        "--goal".as_ref(),
+        "2.4,1.8".as_ref(),
+        "--start=2.4,-1.5,90".as_ref(),
+        "--seed".as_ref(),
+        "0".as_ref(),
+        "--out".as_ref(),
+        out.as_os_str(),
+    ];
+    let args = SimCli::try_parse_from(argv).expect("arguments parse").args;
+    robot_app::cmd::sim::run(args).expect("the 0.74 m door is passable");
+    let s = summary(&out);
+    assert_eq!(s["reason"], "reached", "{s}");
+    let passages = s["narrow_passages"].as_array().expect("an array");
+    // The door spans x in 2.4 +- 0.37 in the wall at y = 0 (0.1 m thick).
+    let door: Vec<_> = passages
+        .iter()
+        .filter(|p| (p["at"][0].as_f64().unwrap() - 2.4).abs() < 0.37)
+        .filter(|p| p["at"][1].as_f64().unwrap().abs() < 0.2)
+        .collect();
+    assert!(!door.is_empty(), "{s}");
+    for p in door {
+        assert!(p["leg"].as_u64().unwrap() >= 1, "{p}");
+        assert!((p["width_m"].as_f64().unwrap() - 0.74).abs() < 0.04, "{p}");
+        assert!(p["clearance_m"].as_f64().unwrap() > 0.3, "{p}");
+    }
+}

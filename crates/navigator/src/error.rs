@@ -25,4 +25,10 @@ pub enum NavigatorError {
         /// Its value, as text.
         value: String,
     },
+    /// [`crate::Navigator::retarget`] before the run to the last goal finished.
+    #[error("a new target needs the run to the last one finished (it is {0:?})")]
+    NotFinished(crate::Phase),
+    /// [`crate::Navigator::retarget`] after a run that ended by a failure.
+    #[error("a run that ended '{0}' cannot take a new target")]
+    EndedBy(crate::Reason),
 }

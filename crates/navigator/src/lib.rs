@@ -25,12 +25,14 @@
 mod clearance;
 mod drive;
 mod error;
+mod explore;
 mod machine;
 mod outcome;
 mod params;
 mod run;
 
 pub use error::NavigatorError;
+pub use explore::{Exploration, ExploreEnd, ExploreParams, Frontier, GoalTry, explore, frontiers};
 pub use machine::{Action, Navigator, Phase};
 pub use outcome::{Leg, NarrowPassage, Outcome, Reason};
 pub use params::{

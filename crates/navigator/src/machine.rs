@@ -116,6 +116,8 @@ pub struct Navigator {
     scans: usize,
     path_length_m: f64,
     legs: usize,
+    /// Legs driven before the current goal was set ([`Navigator::retarget`]).
+    legs_before_goal: usize,
     first_leg: Option<(WorldPoint, WorldPoint)>,
     /// Where the robot stands and the hits seen from there (world frame) while it turns in
     /// place: a replan there still knows what has left the field of view.
@@ -181,6 +183,7 @@ impl Navigator {
             scans: 0,
             path_length_m: 0.0,
             legs: 0,
+            legs_before_goal: 0,
             first_leg: None,
             spot: (start.position(), Vec::new()),
             failures: 0,
@@ -273,7 +276,10 @@ impl Navigator {
             State::Starting => {
                 let scan = scan.clone();
                 self.integrate(&scan);
-                self.record(None, None, &scan);
+                // After a retarget the last leg's end is already recorded.
+                if self.legs_log.is_empty() {
+                    self.record(None, None, &scan);
+                }
                 self.plan_next(scan)
             }
             State::Turning(turn) => self.turn_scanned(turn, scan),
@@ -314,6 +320,42 @@ impl Navigator {
         }
         self.state = State::Finished;
         self.set_pending(Action::Finish(self.reason()))
+    }
+
+    /// Sets a new target once the run to the last one has finished `reached`, `unreachable`
+    /// or at the leg limit (exploration, waypoints). The estimate, the map and the planner's
+    /// memory carry over; the leg limit counts from here. Returns the next action (a scan),
+    /// or an error for a goal that is not finite or a run that has not finished that way.
+    pub fn retarget(&mut self, goal: WorldPoint) -> Result<Action, NavigatorError> {
+        let reason = match (&self.state, &self.end) {
+            (State::Finished, Some((r, _))) => *r,
+            _ => return Err(NavigatorError::NotFinished(self.phase())),
+        };
+        if !matches!(
+            reason,
+            Reason::Reached | Reason::Unreachable | Reason::LegLimit
+        ) {
+            return Err(NavigatorError::EndedBy(reason));
+        }
+        if !(goal.x_m().is_finite()
+            && goal.y_m().is_finite()
+            && goal.x_m().abs() <= MAX_COORD_M
+            && goal.y_m().abs() <= MAX_COORD_M)
+        {
+            return Err(NavigatorError::NotFinite {
+                what: "goal",
+                value: format!("{}, {}", goal.x_m(), goal.y_m()),
+            });
+        }
+        self.goal = goal;
+        self.end = None;
+        self.legs_before_goal = self.legs;
+        self.failures = 0;
+        self.narrow_misses = 0;
+        self.stalled_legs = 0;
+        self.spot = (self.estimate.position(), Vec::new());
+        self.state = State::Starting;
+        Ok(self.set_pending(Action::Scan))
     }
 
     /// How the run ended (or how it stands) and what it recorded.
@@ -389,10 +431,10 @@ impl Navigator {
                 "estimate within tolerance of the target".into(),
             );
         }
-        if self.legs >= n.max_legs {
+        if self.legs - self.legs_before_goal >= n.max_legs {
             let note = format!(
                 "{} legs driven, {to_goal:.2} m from the target by the estimate",
-                self.legs
+                self.legs - self.legs_before_goal
             );
             return self.finish(Reason::LegLimit, note);
         }

@@ -96,6 +96,26 @@ where
     L: LaserSource + ?Sized,
     M: MotionBase + ?Sized,
 {
+    drive(&mut nav, laser, base, monitor, &mut |_| None);
+    if let Err(e) = base.stop() {
+        tracing::warn!("the base did not take stop: {e}");
+    }
+    nav.into_outcome()
+}
+
+/// Answers `nav`'s actions until it finishes, without stopping the base. After every leg end,
+/// `check` may end the run to the current goal with a reason and a note.
+pub(crate) fn drive<L, M>(
+    nav: &mut Navigator,
+    laser: &mut L,
+    base: &mut M,
+    monitor: &mut dyn Monitor,
+    check: &mut dyn FnMut(&Navigator) -> Option<(Reason, String)>,
+) -> Reason
+where
+    L: LaserSource + ?Sized,
+    M: MotionBase + ?Sized,
+{
     let mut action = nav.pending();
     loop {
         if !matches!(action, Action::Finish(_))
@@ -107,12 +127,18 @@ where
             Action::Scan => match laser.next_scan() {
                 Ok(scan) => {
                     let (pose, scans, legs) = (nav.estimate_now(), nav.scans(), nav.legs().len());
-                    let next = nav.on_scan(&scan);
+                    let mut next = nav.on_scan(&scan);
                     if nav.scans() > scans {
                         monitor.scan(&scan, &pose);
                     }
                     for leg in &nav.legs()[legs..] {
                         monitor.leg(leg);
+                    }
+                    if nav.legs().len() > legs
+                        && !matches!(next, Action::Finish(_))
+                        && let Some((reason, note)) = check(nav)
+                    {
+                        next = nav.fail(reason, note);
                     }
                     next
                 }
@@ -120,19 +146,15 @@ where
             },
             Action::Rotate { angle_rad } => {
                 let done = base.rotate(angle_rad);
-                motion_done(&mut nav, done, monitor)
+                motion_done(nav, done, monitor)
             }
             Action::Forward { distance_m } => {
                 let done = base.forward(distance_m);
-                motion_done(&mut nav, done, monitor)
+                motion_done(nav, done, monitor)
             }
-            Action::Finish(_) => break,
+            Action::Finish(reason) => return reason,
         };
     }
-    if let Err(e) = base.stop() {
-        tracing::warn!("the base did not take stop: {e}");
-    }
-    nav.into_outcome()
 }
 
 fn motion_done<E: std::fmt::Display>(

@@ -23,6 +23,9 @@ struct Cli {
 enum Command {
     /// Run goal seeking in the simulator (default: the paper's scenario).
     Sim(cmd::sim::SimArgs),
+    /// Map an unknown world with no target: drive to the frontiers of the map until none is
+    /// left (simulator), with coverage and map accuracy.
+    Explore(cmd::explore::ExploreArgs),
     /// Run goal seeking on a real Hokuyo and a robot base.
     Run(cmd::run::RunArgs),
     /// Run many simulated runs in parallel and summarise them.
@@ -53,6 +56,7 @@ fn main() -> ExitCode {
     robot_app::interrupt::install();
     let result = match cli.command {
         Command::Sim(a) => cmd::sim::run(a),
+        Command::Explore(a) => cmd::explore::run(a),
         Command::Run(a) => cmd::run::run(a),
         Command::Batch(a) => cmd::batch::run(a),
         Command::Emulate(a) => cmd::emulate::run(a),

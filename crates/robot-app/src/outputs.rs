@@ -57,6 +57,36 @@ pub struct Summary {
     pub final_truth: Option<[f64; 3]>,
     /// A one-line note on how the run ended (the error, for a failure).
     pub note: String,
+    /// The narrow passages the run drove through (graded clearance), in leg order.
+    #[serde(default)]
+    pub narrow_passages: Vec<NarrowPassage>,
+}
+
+/// A passage narrower than the full margin allows, taken on one leg.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct NarrowPassage {
+    /// The leg's number (1 = the first leg driven).
+    pub leg: usize,
+    /// Where the robot's centre passes closest to an obstacle, `[x, y]` in metres (estimate's frame).
+    pub at: [f64; 2],
+    /// Distance from there to the nearest hit of the planning scan, metres.
+    pub clearance_m: f64,
+    /// The passage's width across the leg, metres.
+    pub width_m: f64,
+}
+
+/// The `summary.json` records of an outcome's narrow passages.
+pub fn narrow_passages(outcome: &navigator::Outcome) -> Vec<NarrowPassage> {
+    outcome
+        .narrow_passages
+        .iter()
+        .map(|n| NarrowPassage {
+            leg: n.leg,
+            at: [n.at.x_m(), n.at.y_m()],
+            clearance_m: n.clearance_m,
+            width_m: n.width_m,
+        })
+        .collect()
 }
 
 /// One run's term of Success weighted by Path Length (Anderson et al. 2018):

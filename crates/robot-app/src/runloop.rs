@@ -39,6 +39,42 @@ where
     let nav = Navigator::new(params.clone(), *laser.geometry(), start, goal)?;
     let mut watch = TruthMonitor::new(eval, hook, interrupted);
     let outcome = navigator::run(nav, laser, base, &mut watch);
+    let log = run_log(&outcome, &watch, Some(goal));
+    Ok(LoopRun { outcome, log })
+}
+
+/// An exploration's [`navigator::Exploration`] and the rows of `trajectory.csv`.
+pub struct ExploreRun {
+    /// What the exploration did.
+    pub exploration: navigator::Exploration,
+    /// Leg ends with the true pose beside the estimate where a simulator knows it.
+    pub log: RunLog,
+}
+
+/// Explores from `start` with `params` on `laser` and `base` ([`navigator::explore`]); `eval`
+/// (a simulator's truth) is recorded beside the estimate, `hook` sees every scan.
+pub fn explore_loop<'a, L, M>(
+    laser: &mut L,
+    base: &mut M,
+    params: &Params,
+    explore: &navigator::ExploreParams,
+    start: Pose2,
+    eval: Option<&'a dyn GroundTruth>,
+    hook: Option<ScanPoseHook<'a>>,
+) -> anyhow::Result<ExploreRun>
+where
+    L: LaserSource + ?Sized,
+    M: MotionBase + ?Sized,
+{
+    let nav = Navigator::new(params.clone(), *laser.geometry(), start, start.position())?;
+    let mut watch = TruthMonitor::new(eval, hook, interrupted);
+    let exploration = navigator::explore(nav, laser, base, &mut watch, explore);
+    let log = run_log(&exploration.outcome, &watch, None);
+    Ok(ExploreRun { exploration, log })
+}
+
+/// The legs of `outcome` with the truths `watch` recorded beside them.
+fn run_log(outcome: &Outcome, watch: &TruthMonitor, goal: Option<WorldPoint>) -> RunLog {
     let legs = outcome
         .legs
         .iter()
@@ -59,9 +95,5 @@ where
             scan_points: l.scan_points.clone(),
         })
         .collect();
-    let log = RunLog {
-        goal: Some(goal),
-        legs,
-    };
-    Ok(LoopRun { outcome, log })
+    RunLog { goal, legs }
 }

@@ -109,6 +109,7 @@ mod outputs {
             final_estimate: [0.0; 3],
             final_truth: None,
             note: "laser timed out".into(),
+            narrow_passages: Vec::new(),
         };
         write_summary(dir.path(), &s).unwrap();
         let text = std::fs::read_to_string(dir.path().join("summary.json")).unwrap();

@@ -7,7 +7,7 @@ use toml::Spanned;
 
 use crate::stage::bitmap_from_image;
 use crate::world::{Bitmap, Obstacle, WorldParts};
-use crate::{SimError, World};
+use crate::{SimError, UnknownCells, World};
 
 /// A vector world with its scenario: what the generator produces and the TOML format stores.
 #[derive(Debug, Clone, PartialEq, Default)]
@@ -72,6 +72,7 @@ impl WorldDescription {
                 .map(|[x, y, t]| Spanned::new(0..0, [x, y, t.to_degrees()])),
             target: self.target,
             bitmap: None,
+            map_server: None,
             r#box: Vec::new(),
             circle: Vec::new(),
             polygon: Vec::new(),
@@ -224,6 +225,8 @@ struct TomlWorld {
     bounds: Option<Spanned<TomlBounds>>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     bitmap: Option<Spanned<TomlBitmap>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    map_server: Option<Spanned<TomlMapServer>>,
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     r#box: Vec<Spanned<TomlBox>>,
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
@@ -252,6 +255,14 @@ struct TomlBitmap {
     centre: [f64; 2],
     #[serde(default)]
     boundary: bool,
+}
+
+#[derive(Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct TomlMapServer {
+    yaml: String,
+    #[serde(default)]
+    unknown: UnknownCells,
 }
 
 #[derive(Debug, Serialize, Deserialize)]
@@ -468,8 +479,24 @@ fn wall_obstacle(v: &TomlWall) -> Obstacle {
     }
 }
 
-/// The bitmap a TOML world refers to (path relative to the world file), if any.
+/// The bitmap a TOML world refers to (a Stage image or a map_server map, path relative to the
+/// world file), if any.
 fn toml_bitmap(src: &TomlSource, file: &TomlWorld) -> Result<Option<Bitmap>, SimError> {
+    if let Some(m) = &file.map_server {
+        let line = src.line(m.span());
+        if file.bitmap.is_some() {
+            return Err(src.err(
+                line,
+                "map_server",
+                "a world has either [bitmap] or [map_server], not both".into(),
+            ));
+        }
+        let m = m.get_ref();
+        let yaml = src.path.parent().unwrap_or(Path::new(".")).join(&m.yaml);
+        return crate::mapserver::map_server_bitmap(&yaml, m.unknown)
+            .map(Some)
+            .map_err(|e| src.err(line, "map_server.yaml", e.to_string()));
+    }
     let Some(b) = &file.bitmap else {
         return Ok(None);
     };

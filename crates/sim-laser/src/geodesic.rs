@@ -16,8 +16,8 @@ use crate::{FreeSpace, SimError, World};
 /// Grid cell of the geodesic, metres.
 pub const GEODESIC_CELL_M: f64 = 0.025;
 
-/// Most grid cells a geodesic may use (a 50 m x 50 m world at [`GEODESIC_CELL_M`]).
-pub const GEODESIC_MAX_CELLS: usize = 4_000_000;
+/// Most grid cells a geodesic may use (a 75 m x 75 m world at [`GEODESIC_CELL_M`]).
+pub const GEODESIC_MAX_CELLS: usize = 9_000_000;
 
 /// Farthest a start or goal is moved to reach a free cell, metres.
 pub const GEODESIC_SNAP_M: f64 = 0.25;

@@ -16,6 +16,17 @@ pub enum MapMode {
     Raw,
 }
 
+/// What the simulator makes of a map_server map's unknown cells (neither free nor occupied).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Deserialize, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum UnknownCells {
+    /// Unknown is free space (map_server's maps as the simulator read them before this switch).
+    #[default]
+    Free,
+    /// Unknown is an obstacle: for maps built by SLAM, whose outside is unknown.
+    Obstacle,
+}
+
 /// The fields of a map_server YAML file.
 #[derive(Debug, Clone, PartialEq)]
 pub struct MapServerYaml {
@@ -130,17 +141,31 @@ pub fn parse_map_yaml(text: &str, path: &Path) -> Result<MapServerYaml, SimError
 }
 
 impl MapServerYaml {
+    /// The occupancy probability map_server gives a pixel of mean channel value `v` (0..=255).
+    fn probability(&self, v: f64) -> f64 {
+        if self.negate {
+            v / 255.0
+        } else {
+            (255.0 - v) / 255.0
+        }
+    }
+
     /// True when a pixel of mean channel value `v` (0..=255) is an obstacle.
     pub fn is_occupied(&self, v: f64) -> bool {
         match self.mode {
             MapMode::Raw => (v > self.occupied_thresh * 100.0) && v <= 100.0,
+            MapMode::Trinary | MapMode::Scale => self.probability(v) > self.occupied_thresh,
+        }
+    }
+
+    /// True when a pixel of mean channel value `v` (0..=255) is unknown: neither occupied nor
+    /// free (trinary and scale: between the thresholds; raw: above 100).
+    pub fn is_unknown(&self, v: f64) -> bool {
+        match self.mode {
+            MapMode::Raw => v > 100.0,
             MapMode::Trinary | MapMode::Scale => {
-                let p = if self.negate {
-                    v / 255.0
-                } else {
-                    (255.0 - v) / 255.0
-                };
-                p > self.occupied_thresh
+                let p = self.probability(v);
+                p >= self.free_thresh && p <= self.occupied_thresh
             }
         }
     }
@@ -150,36 +175,18 @@ impl World {
     /// Loads a ROS map_server map: the YAML file and the image it names. Occupied pixels are
     /// obstacles; free and unknown pixels are free space.
     pub fn load_map_server(yaml_path: impl AsRef<Path>) -> Result<World, SimError> {
+        World::load_map_server_with(yaml_path, UnknownCells::Free)
+    }
+
+    /// Loads a ROS map_server map with its unknown pixels read as `unknown` says.
+    pub fn load_map_server_with(
+        yaml_path: impl AsRef<Path>,
+        unknown: UnknownCells,
+    ) -> Result<World, SimError> {
         let path = yaml_path.as_ref();
-        let text = std::fs::read_to_string(path).map_err(|source| SimError::Io {
-            path: path.to_path_buf(),
-            source,
-        })?;
-        let y = parse_map_yaml(&text, path)?;
-        let img_path = path.parent().unwrap_or(Path::new(".")).join(&y.image);
-        let img = image::open(&img_path)
-            .map_err(|e| SimError::Image {
-                path: img_path.clone(),
-                message: e.to_string(),
-            })?
-            .to_rgb8();
-        let (w, h) = (img.width() as usize, img.height() as usize);
-        let mut occupied = vec![false; w * h];
-        for (x, yy, p) in img.enumerate_pixels() {
-            let v = (p.0[0] as f64 + p.0[1] as f64 + p.0[2] as f64) / 3.0;
-            let row = h - 1 - yy as usize;
-            occupied[row * w + x as usize] = y.is_occupied(v);
-        }
         World::from_parts(WorldParts {
             name: path.display().to_string(),
-            bitmap: Some(Bitmap {
-                width: w,
-                height: h,
-                cell_w_m: y.resolution_m,
-                cell_h_m: y.resolution_m,
-                origin: [y.origin[0], y.origin[1]],
-                occupied,
-            }),
+            bitmap: Some(map_server_bitmap(path, unknown)?),
             ..Default::default()
         })
     }
@@ -235,4 +242,36 @@ impl World {
             }),
         }
     }
+}
+
+/// The bitmap of a map_server map: occupied pixels, and unknown ones if `unknown` says so.
+pub(crate) fn map_server_bitmap(path: &Path, unknown: UnknownCells) -> Result<Bitmap, SimError> {
+    let text = std::fs::read_to_string(path).map_err(|source| SimError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let y = parse_map_yaml(&text, path)?;
+    let img_path = path.parent().unwrap_or(Path::new(".")).join(&y.image);
+    let img = image::open(&img_path)
+        .map_err(|e| SimError::Image {
+            path: img_path.clone(),
+            message: e.to_string(),
+        })?
+        .to_rgb8();
+    let (w, h) = (img.width() as usize, img.height() as usize);
+    let mut occupied = vec![false; w * h];
+    for (x, yy, p) in img.enumerate_pixels() {
+        let v = (p.0[0] as f64 + p.0[1] as f64 + p.0[2] as f64) / 3.0;
+        let row = h - 1 - yy as usize;
+        occupied[row * w + x as usize] =
+            y.is_occupied(v) || (unknown == UnknownCells::Obstacle && y.is_unknown(v));
+    }
+    Ok(Bitmap {
+        width: w,
+        height: h,
+        cell_w_m: y.resolution_m,
+        cell_h_m: y.resolution_m,
+        origin: [y.origin[0], y.origin[1]],
+        occupied,
+    })
 }

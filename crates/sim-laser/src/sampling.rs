@@ -195,6 +195,25 @@ impl FreeSpace {
         Some(self.component[iy * self.nx + ix]).filter(|&c| c != 0)
     }
 
+    /// A seeded random pose (cell centre, heading) in the largest connected free region: where
+    /// an exploration of an unknown world starts when none is given.
+    pub fn random_start(&self, seed: u64) -> Option<Pose2> {
+        let mut sizes = std::collections::HashMap::<u32, usize>::new();
+        for &c in self.component.iter().filter(|&&c| c != 0) {
+            *sizes.entry(c).or_default() += 1;
+        }
+        let (&largest, _) = sizes
+            .iter()
+            .max_by_key(|&(c, n)| (*n, std::cmp::Reverse(*c)))?;
+        let cells: Vec<usize> = (0..self.component.len())
+            .filter(|&k| self.component[k] == largest)
+            .collect();
+        let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0xe0_0000_0000);
+        let p = self.centre(cells[rng.random_range(0..cells.len())]);
+        let heading = rng.random_range(-std::f64::consts::PI..std::f64::consts::PI);
+        Some(Pose2::new(p.x_m(), p.y_m(), heading))
+    }
+
     /// As [`FreeSpace::random_pair`], with both ends where `keep` holds.
     pub fn random_pair_where(
         &self,

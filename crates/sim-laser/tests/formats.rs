@@ -165,6 +165,46 @@ fn map_server_by_hand() {
     assert!((w.raycast(p(0.0, 2.75), 0.0, 10.0).unwrap() - 2.0).abs() < 1e-12);
     // The unknown (205) pixel at the bottom row is free.
     assert_eq!(w.raycast(p(0.0, 2.25), 0.0, 10.0), None);
+    // Read through a TOML world with unknown = "obstacle", it is an obstacle: column 1 starts at
+    // x = 1.5. The black pixel is still where it was.
+    let toml = dir.path().join("w.toml");
+    std::fs::write(
+        &toml,
+        "[map_server]\nyaml = \"m.yaml\"\nunknown = \"obstacle\"\n",
+    )
+    .unwrap();
+    let u = World::load(&toml).unwrap();
+    assert!((u.raycast(p(0.0, 2.25), 0.0, 10.0).unwrap() - 1.5).abs() < 1e-12);
+    assert!((u.raycast(p(0.0, 2.75), 0.0, 10.0).unwrap() - 2.0).abs() < 1e-12);
+    // unknown = "free" (the default) reads it as the YAML alone does.
+    std::fs::write(
+        &toml,
+        "[map_server]\nyaml = \"m.yaml\"\nunknown = \"free\"\n",
+    )
+    .unwrap();
+    let f = World::load(&toml).unwrap();
+    assert_eq!(f.raycast(p(0.0, 2.25), 0.0, 10.0), None);
+    // Errors name the file, line and key.
+    std::fs::write(
+        &toml,
+        "name = \"x\"\n[map_server]\nyaml = \"m.yaml\"\nunknown = \"grey\"\n",
+    )
+    .unwrap();
+    let e = World::load(&toml).unwrap_err().to_string();
+    assert!(e.contains("w.toml:4") && e.contains("grey"), "{e}");
+    std::fs::write(&toml, "[map_server]\nyaml = \"none.yaml\"\n").unwrap();
+    let e = World::load(&toml).unwrap_err().to_string();
+    assert!(
+        e.contains("w.toml:1: map_server.yaml") && e.contains("none.yaml"),
+        "{e}"
+    );
+    std::fs::write(
+        &toml,
+        "[bitmap]\nimage = \"m.pgm\"\nsize = [2.0, 1.5]\n[map_server]\nyaml = \"m.yaml\"\n",
+    )
+    .unwrap();
+    let e = World::load(&toml).unwrap_err().to_string();
+    assert!(e.contains("not both"), "{e}");
     // Negated, the white pixels become obstacles: the first is at x = 1.
     std::fs::write(
         &yaml,
@@ -226,6 +266,40 @@ fn nav2_maps_load() {
         .filter(|k| d.raycast(c, (*k as f64).to_radians(), 30.0).is_some())
         .count();
     assert!(hits > 300, "{hits}");
+}
+
+/// The floor-plan worlds shipped in `sim/floorplans/` load, at the sizes their files give
+/// (Stage's mbicp.world, the MANIFEST's scales, the map_server YAML files).
+#[test]
+#[allow(clippy::print_stdout)]
+fn shipped_floor_plans_load_at_their_sizes() {
+    let dir = Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../../sim/floorplans"));
+    if !Path::new(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../../shared/worlds"
+    ))
+    .exists()
+    {
+        println!("note: ../shared/worlds missing, skipped");
+        return;
+    }
+    for (file, w, h) in [
+        ("sal2.toml", 44.35, 20.35),
+        ("mbicp.toml", 28.0, 10.0),
+        ("simple_rooms.toml", 16.0, 12.0),
+        ("sri-aic-kwing.toml", 85.6, 29.3),
+        ("tb3_sandbox.toml", 384.0 * 0.05, 384.0 * 0.05),
+        ("depot.toml", 604.0 * 0.05, 307.0 * 0.05),
+    ] {
+        let world = World::load(dir.join(file)).unwrap_or_else(|e| panic!("{file}: {e}"));
+        let (lo, hi) = world.bounds();
+        let (gw, gh) = (hi.x_m() - lo.x_m(), hi.y_m() - lo.y_m());
+        // Stage bitmaps scale their dark-pixel box to the size: within a pixel of it.
+        assert!(
+            (gw - w).abs() < 0.11 && (gh - h).abs() < 0.11,
+            "{file}: {gw} x {gh}"
+        );
+    }
 }
 
 #[test]

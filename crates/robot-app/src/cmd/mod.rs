@@ -3,6 +3,7 @@
 pub mod batch;
 pub mod emulate;
 pub mod expand;
+pub mod explore;
 pub mod info;
 pub mod landmarks;
 pub mod map;

@@ -152,5 +152,6 @@ fn summary_of(
         final_estimate: deg(&outcome.estimate),
         final_truth: None,
         note: outcome.note.clone(),
+        narrow_passages: crate::outputs::narrow_passages(outcome),
     }
 }

@@ -217,6 +217,7 @@ fn simulate_inner(
         final_estimate: pose_deg(&outcome.estimate),
         final_truth: Some(pose_deg(&t)),
         note,
+        narrow_passages: crate::outputs::narrow_passages(outcome),
     };
     Ok(SimRun {
         summary,

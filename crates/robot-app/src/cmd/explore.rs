@@ -1,0 +1,314 @@
+//! `robot-app explore`: map an unknown world with no target, driving to the frontiers of the
+//! robot's own map until none is left; in the simulator, with coverage and map accuracy.
+
+use std::path::PathBuf;
+
+use anyhow::{Context, bail};
+use clap::Args;
+use localiser::{CellState, OccupancyGrid};
+use navigator::{ExploreEnd, ExploreParams, Reason};
+use scan_types::{Pose2, WorldPoint};
+use serde::Serialize;
+use sim_laser::{FreeSpace, PAIR_CELL_M, SensorPreset, SimSetup, World, paper_start};
+
+use crate::cmd::sim::thread_cpu_time_s;
+use crate::outputs::write_atomic;
+use crate::runloop::explore_loop;
+
+/// Arguments of `robot-app explore`.
+#[derive(Debug, Args)]
+pub struct ExploreArgs {
+    /// World file (as `robot-app sim --world`). Default: the paper's world.
+    #[arg(long, value_name = "PATH")]
+    pub world: Option<PathBuf>,
+    /// Start pose X,Y,THETA_DEG (default: the world file's start, the paper's in its world,
+    /// else a seeded random pose in the largest free region).
+    #[arg(long, value_name = "X,Y,THETA_DEG", allow_hyphen_values = true)]
+    pub start: Option<String>,
+    /// Sensor preset: paper, urg-04lx, utm-30lx or ust-10lx.
+    #[arg(long, default_value = "paper")]
+    pub sensor: String,
+    /// Noise seed.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// `off` turns laser and motion noise off; `on` (or `default`) keeps the preset's noise.
+    #[arg(long, value_enum, default_value = "on")]
+    pub noise: super::Noise,
+    /// Most frontiers to try.
+    #[arg(long, default_value_t = ExploreParams::default().max_goals)]
+    pub max_goals: usize,
+    /// Most legs toward one frontier before it is given up.
+    #[arg(long, default_value_t = ExploreParams::default().legs_per_goal)]
+    pub legs_per_goal: usize,
+    /// Configuration and output folder (`--record` is not taken here).
+    #[command(flatten)]
+    pub options: super::LoopOptions,
+}
+
+/// One frontier tried, as `explore.json` lists it.
+#[derive(Debug, Clone, Serialize)]
+pub struct GoalRecord {
+    /// The frontier's target `[x, y]`, metres.
+    pub target: [f64; 2],
+    /// How the run to it ended.
+    pub reason: Reason,
+    /// Legs driven toward it.
+    pub legs: usize,
+}
+
+/// `explore.json`: what an exploration did and, in the simulator, how good its map is.
+#[derive(Debug, Clone, Serialize)]
+pub struct ExploreSummary {
+    /// How it ended: explored (no untried frontier left), goal_limit or failed.
+    pub end: ExploreEnd,
+    /// The last run's reason (the failure, when `end` is failed).
+    pub reason: Reason,
+    /// A one-line note on the last run.
+    pub note: String,
+    /// Frontiers tried.
+    pub goals_tried: usize,
+    /// Frontiers reached.
+    pub goals_reached: usize,
+    /// Every frontier tried, in order.
+    pub goals: Vec<GoalRecord>,
+    /// Legs driven.
+    pub legs: usize,
+    /// Scans taken.
+    pub scans: usize,
+    /// Collisions the simulator recorded.
+    pub collisions: usize,
+    /// Distance commanded, metres.
+    pub path_length_m: f64,
+    /// Distance truly driven, metres (simulator).
+    pub true_path_length_m: Option<f64>,
+    /// Share of the reachable free space (eroded by the robot radius) the map marks free.
+    pub coverage: Option<f64>,
+    /// Share of the map's occupied cells within 1.5 cells of a true obstacle.
+    pub map_accuracy: Option<f64>,
+    /// Distance between the final estimate and the true position, metres (simulator).
+    pub final_position_error_m: Option<f64>,
+    /// RMS of the position error at every leg end, metres (simulator).
+    pub ate_rmse_m: Option<f64>,
+    /// CPU time, seconds (the loop's own thread).
+    pub cpu_time_s: f64,
+    /// Method preset used.
+    pub method: String,
+    /// Noise seed.
+    pub seed: u64,
+    /// Start pose `[x, y, theta_deg]`.
+    pub start: [f64; 3],
+}
+
+/// Coverage and map accuracy of `grid` (in the world's frame) against the true `world`.
+///
+/// Coverage: the share of the cells (0.05 m) at least `radius_m` from every obstacle and
+/// connected to `start` that the map marks free. Accuracy: the share of the map's occupied
+/// cells whose centre lies within 1.5 cells of a true obstacle (or inside one).
+pub fn map_quality(
+    world: &World,
+    radius_m: f64,
+    start: WorldPoint,
+    grid: &OccupancyGrid,
+) -> (Option<f64>, Option<f64>) {
+    let space = FreeSpace::new(world, radius_m, 0.05);
+    let region = space.region_of(start);
+    let (mut reachable, mut seen) = (0usize, 0usize);
+    if let Some(region) = region {
+        for p in space.free_cells() {
+            if space.region_of(p) == Some(region) {
+                reachable += 1;
+                if grid.state(p) == CellState::Free {
+                    seen += 1;
+                }
+            }
+        }
+    }
+    let coverage = (reachable > 0).then(|| seen as f64 / reachable as f64);
+    let near = 1.5 * grid.resolution_m();
+    let (mut occupied, mut right) = (0usize, 0usize);
+    for row in 0..grid.height() {
+        for col in 0..grid.width() {
+            if grid.cell_state(col, row) != CellState::Occupied {
+                continue;
+            }
+            occupied += 1;
+            let c = grid.cell_centre(col, row);
+            if world.is_occupied(c) || world.clearance(c, near + 0.01) <= near {
+                right += 1;
+            }
+        }
+    }
+    let accuracy = (occupied > 0).then(|| right as f64 / occupied as f64);
+    (coverage, accuracy)
+}
+
+/// Runs `robot-app explore` in the simulator.
+pub fn run(args: ExploreArgs) -> anyhow::Result<()> {
+    if args.options.record.is_some() {
+        bail!("--record: not supported by explore yet");
+    }
+    let config = args.options.load()?;
+    let mut setup = match &args.world {
+        None => SimSetup::load(None)?,
+        Some(p) => {
+            SimSetup::load(Some(p)).with_context(|| format!("cannot load world {}", p.display()))?
+        }
+    };
+    setup.sensor = args
+        .sensor
+        .parse::<SensorPreset>()
+        .map_err(|e| anyhow::anyhow!("--sensor {}: {e}", args.sensor))?;
+    // The world file's start, else (a map without one) a seeded random start in the largest
+    // free region.
+    let file_start = match &args.world {
+        None => Some(paper_start()),
+        Some(p) if p.extension().is_some_and(|e| e == "toml") => sim_laser::read_description(p)
+            .with_context(|| format!("reading the scenario of {}", p.display()))?
+            .start
+            .map(|[x, y, t]| Pose2::new(x, y, t)),
+        Some(_) => None,
+    };
+    setup.start = match (&args.start, file_start) {
+        (Some(s), _) => scan_types::parse_pose_deg(s).context("--start")?,
+        (None, Some(s)) => s,
+        (None, None) => FreeSpace::new(&setup.world, config.robot.radius_m + 0.1, PAIR_CELL_M)
+            .random_start(args.seed)
+            .context("no free space for the robot in the world: give --start")?,
+    };
+    setup.seed = args.seed;
+    setup.noise = args.noise.is_on();
+    setup.robot_radius_m = config.robot.radius_m;
+    setup
+        .check_scenario(setup.start.position())
+        .map_err(|e| anyhow::anyhow!("{e}; give a start in its free space with --start"))?;
+    args.options.write_config(&config)?;
+    let params = ExploreParams {
+        max_goals: args.max_goals,
+        legs_per_goal: args.legs_per_goal,
+        ..ExploreParams::default()
+    };
+    if params.max_goals == 0 || params.legs_per_goal == 0 {
+        bail!("--max-goals and --legs-per-goal must be at least 1");
+    }
+
+    let cpu0 = thread_cpu_time_s();
+    let sim = setup.build()?;
+    let (mut laser, mut base, truth) = sim.split();
+    let run = explore_loop(
+        &mut laser,
+        &mut base,
+        &config,
+        &params,
+        setup.start,
+        Some(&truth),
+        None,
+    )?;
+    let cpu = thread_cpu_time_s() - cpu0;
+    let ex = &run.exploration;
+    let (coverage, map_accuracy) = map_quality(
+        &setup.world,
+        setup.robot_radius_m,
+        setup.start.position(),
+        &ex.outcome.grid,
+    );
+    let collisions = truth.collisions();
+    let t = truth.pose();
+    let summary = ExploreSummary {
+        end: ex.end,
+        reason: if collisions > 0 {
+            Reason::Collision
+        } else {
+            ex.outcome.reason
+        },
+        note: ex.outcome.note.clone(),
+        goals_tried: ex.goals.len(),
+        goals_reached: ex
+            .goals
+            .iter()
+            .filter(|g| g.reason == Reason::Reached)
+            .count(),
+        goals: ex
+            .goals
+            .iter()
+            .map(|g| GoalRecord {
+                target: [g.target.x_m(), g.target.y_m()],
+                reason: g.reason,
+                legs: g.legs,
+            })
+            .collect(),
+        legs: ex.outcome.legs_driven,
+        scans: ex.outcome.scans,
+        collisions,
+        path_length_m: ex.outcome.path_length_m,
+        true_path_length_m: Some(truth.travelled_m()),
+        coverage,
+        map_accuracy,
+        final_position_error_m: Some(ex.outcome.estimate.position().distance_m(&t.position())),
+        ate_rmse_m: run.log.ate_rmse_m(),
+        cpu_time_s: cpu,
+        method: config.method.to_string(),
+        seed: setup.seed,
+        start: pose_deg(&setup.start),
+    };
+    write_outputs(&args.options.out, &run, &summary, &setup.world_name)?;
+    #[allow(clippy::print_stdout)]
+    {
+        println!(
+            "{}: {} frontiers tried ({} reached), {} legs, coverage {:.1} %, map accuracy {:.1} %, collisions {}, final localisation error {:.3} m, outputs in {}",
+            match summary.end {
+                ExploreEnd::Explored => "explored",
+                ExploreEnd::GoalLimit => "goal limit",
+                ExploreEnd::Failed => "failed",
+            },
+            summary.goals_tried,
+            summary.goals_reached,
+            summary.legs,
+            100.0 * coverage.unwrap_or(f64::NAN),
+            100.0 * map_accuracy.unwrap_or(f64::NAN),
+            collisions,
+            summary.final_position_error_m.unwrap_or(f64::NAN),
+            args.options.out.display()
+        );
+    }
+    if summary.reason == Reason::Interrupted {
+        return Err(crate::interrupt::Interrupted.into());
+    }
+    if summary.end == ExploreEnd::Failed || collisions > 0 {
+        bail!(
+            "the exploration failed: {} ({})",
+            summary.reason,
+            summary.note
+        );
+    }
+    Ok(())
+}
+
+fn pose_deg(p: &Pose2) -> [f64; 3] {
+    [p.x_m, p.y_m, p.theta_rad.to_degrees()]
+}
+
+/// Writes `explore.json`, `trajectory.csv`, the TUM files, the maps and the run's figure.
+fn write_outputs(
+    dir: &std::path::Path,
+    run: &crate::runloop::ExploreRun,
+    summary: &ExploreSummary,
+    world: &str,
+) -> anyhow::Result<()> {
+    std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    let mut text = serde_json::to_string_pretty(summary)?;
+    text.push('\n');
+    write_atomic(&dir.join("explore.json"), text.as_bytes())?;
+    scan_log::write_trajectory(dir, &run.log)?;
+    let grid = &run.exploration.outcome.grid;
+    grid.write_map_server(dir, "map")
+        .with_context(|| format!("writing map.pgm/map.yaml in {}", dir.display()))?;
+    grid.to_png(&dir.join("map.png"))
+        .with_context(|| format!("writing map.png in {}", dir.display()))?;
+    let title = format!(
+        "explore — {world}, seed {}: {} frontiers, coverage {:.0} %",
+        summary.seed,
+        summary.goals_tried,
+        100.0 * summary.coverage.unwrap_or(f64::NAN)
+    );
+    crate::plot::write_plots(dir, &run.log, &title)
+}

@@ -1,0 +1,117 @@
+//! `robot-app explore`: coverage and map accuracy checked by hand on a square room, and a whole
+//! exploration of the paper's world against the bars of issue 15 (coverage at least 95 %, map
+//! accuracy at least 98 %, no collision).
+#![allow(clippy::print_stdout)] // tests report to the terminal
+
+use std::ffi::OsStr;
+use std::path::Path;
+
+use clap::Parser;
+use localiser::OccupancyGrid;
+use robot_app::cmd::explore::{ExploreArgs, map_quality};
+use scan_types::{Pose2, Scan, ScanGeometry, WorldPoint};
+use sim_laser::World;
+
+/// A 4 m x 4 m room with a boundary wall, centred on the origin.
+const ROOM: &str = "[bounds]\nmin = [-2.0, -2.0]\nmax = [2.0, 2.0]\nboundary = true\n";
+
+/// The exact scan of `world` from `pose` (the paper's 240 deg, 4 m sensor).
+fn scan(world: &World, g: &ScanGeometry, pose: Pose2) -> Scan {
+    let ranges: Vec<f64> = (0..g.ray_count)
+        .map(|i| {
+            world
+                .raycast(
+                    pose.position(),
+                    pose.theta_rad + g.bearing_rad(i),
+                    g.max_range_m,
+                )
+                .unwrap_or(f64::INFINITY)
+        })
+        .collect();
+    Scan::from_ranges(g, &ranges, 0.0)
+}
+
+/// The map of scans taken at `truth` but placed at `placed` (same headings).
+fn map(world: &World, truth: &[Pose2], offset: (f64, f64)) -> OccupancyGrid {
+    let g = ScanGeometry::paper();
+    let mut grid = OccupancyGrid::new(0.05);
+    for p in truth {
+        let placed = Pose2::new(p.x_m + offset.0, p.y_m + offset.1, p.theta_rad);
+        assert!(grid.integrate(&placed, &g, &scan(world, &g, *p)));
+    }
+    grid
+}
+
+#[test]
+fn coverage_and_accuracy_by_hand_in_a_square_room() {
+    let world = World::from_toml_str(ROOM, Path::new("room.toml")).unwrap();
+    let centre = WorldPoint::new(0.0, 0.0);
+    let east = Pose2::new(0.0, 0.0, 0.0);
+    let west = Pose2::new(0.0, 0.0, std::f64::consts::PI);
+
+    // Seen all round from the centre: every cell a 0.3 m robot can reach is free, and every
+    // occupied cell holds the wall.
+    let (cov, acc) = map_quality(&world, 0.3, centre, &map(&world, &[east, west], (0.0, 0.0)));
+    let (cov, acc) = (cov.unwrap(), acc.unwrap());
+    assert!(cov > 0.99, "coverage {cov}");
+    assert!(acc > 0.999, "accuracy {acc}");
+
+    // Looking east only, the 120 deg wedge behind the robot stays unknown. In the reachable
+    // square of half-side a = 1.7 m, that wedge covers a^2 (the 90 deg between the diagonals)
+    // plus two triangles of a^2 (1 - 1/sqrt 3) / 2: 1.4226 a^2 of 4 a^2, so coverage is
+    // 1 - 0.3557 = 0.644.
+    let (cov, _) = map_quality(&world, 0.3, centre, &map(&world, &[east], (0.0, 0.0)));
+    let cov = cov.unwrap();
+    assert!((cov - 0.644).abs() < 0.03, "coverage {cov}");
+
+    // Placed 0.2 m (4 cells) east of where they were taken, the east and west walls land
+    // 0.2 m off (not within 1.5 cells); the north and south walls slide along themselves and
+    // stay right except within 0.2 m of their ends: about half the occupied cells are right.
+    let (_, acc) = map_quality(&world, 0.3, centre, &map(&world, &[east, west], (0.2, 0.0)));
+    let acc = acc.unwrap();
+    assert!((0.35..0.65).contains(&acc), "accuracy {acc}");
+}
+
+/// `robot-app explore`'s arguments on their own.
+#[derive(Parser)]
+struct ExploreCli {
+    #[command(flatten)]
+    args: ExploreArgs,
+}
+
+#[test]
+fn the_paper_world_is_explored_without_a_goal() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let argv: [&OsStr; 5] = [
+        "explore".as_ref(),
+        "--seed".as_ref(),
+        "0".as_ref(),
+        "--out".as_ref(),
+        out.as_os_str(),
+    ];
+    let args = ExploreCli::try_parse_from(argv).unwrap().args;
+    robot_app::cmd::explore::run(args).expect("the exploration ends without a failure");
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("explore.json")).unwrap()).unwrap();
+    println!("{s}");
+    assert_eq!(s["end"], "explored", "{s}");
+    assert_eq!(s["collisions"], 0, "{s}");
+    assert!(s["coverage"].as_f64().unwrap() >= 0.95, "{s}");
+    assert!(s["map_accuracy"].as_f64().unwrap() >= 0.98, "{s}");
+    // Every frontier tried is listed with how it ended, and the legs add up.
+    let goals = s["goals"].as_array().unwrap();
+    assert_eq!(goals.len() as u64, s["goals_tried"].as_u64().unwrap());
+    let legs: u64 = goals.iter().map(|g| g["legs"].as_u64().unwrap()).sum();
+    assert_eq!(legs, s["legs"].as_u64().unwrap(), "{s}");
+    for f in [
+        "map.pgm",
+        "map.yaml",
+        "map.png",
+        "trajectory.csv",
+        "run.png",
+        "config.toml",
+    ] {
+        assert!(out.join(f).is_file(), "{f}");
+    }
+}
