@@ -47,6 +47,10 @@ const BASE_FRAME: &str = "base_link";
 /// The map is sent at most this often between leg ends.
 const MAP_PERIOD: Duration = Duration::from_secs(1);
 
+/// How long the server stays up after the run when a client is connected, so that the last
+/// messages (the final map) reach it.
+const LINGER: Duration = Duration::from_secs(1);
+
 /// `--live` and `--live-wait`, shared by `sim`, `run`, `replay` and `slam`.
 #[derive(Debug, Clone, Default, Args)]
 pub struct LiveOptions {
@@ -343,10 +347,12 @@ impl LiveView {
         }
     }
 
-    /// Sends the final map (if any) and the markers, then shuts the server down.
+    /// Sends the final map (`grid`, or without one the map built from the scans) and the
+    /// markers, then shuts the server down.
     pub fn finish(mut self, grid: Option<&OccupancyGrid>) {
-        if let Some(g) = grid {
-            self.send_map(g);
+        match grid {
+            Some(g) => self.send_map(g),
+            None => self.send_own_map(),
         }
         self.send_markers();
         self.shutdown();
@@ -355,6 +361,10 @@ impl LiveView {
     fn shutdown(&mut self) {
         if let Some(server) = self.server.take() {
             let clients = server.client_count();
+            if clients > 0 {
+                // Stopping drops what the clients' queues still hold: let them drain first.
+                std::thread::sleep(LINGER);
+            }
             server.stop().wait_blocking();
             tracing::info!(
                 scans = self.scans,

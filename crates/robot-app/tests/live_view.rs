@@ -181,14 +181,19 @@ fn a_foxglove_websocket_client_receives_the_scans_of_a_sim_run() {
     let stamps: Vec<f64> = scans.iter().map(|s| f(&s["stamp"])).collect();
     assert!(stamps.windows(2).all(|w| w[0] <= w[1]), "{stamps:?}");
 
-    // Poses and transforms in the map frame, one per scan; the map and the markers.
+    // Poses and transforms in the map frame, one per scan (a slow client may miss some:
+    // the server drops what a client cannot take); the map and the markers.
     for topic in ["/pose_estimate", "/pose_truth"] {
         let poses = d["poses"][topic].as_array().unwrap();
-        assert_eq!(poses.len(), scans.len(), "{topic}");
+        assert!(
+            !poses.is_empty() && poses.len() as u64 <= run_scans,
+            "{topic}: {}",
+            poses.len()
+        );
         assert!(poses.iter().all(|p| p[4] == "map"), "{topic}");
     }
     let tf = d["tf"].as_array().unwrap();
-    assert_eq!(tf.len(), scans.len());
+    assert!(!tf.is_empty() && tf.len() as u64 <= run_scans);
     assert!(tf.iter().all(|t| t[0] == "map" && t[1] == "base_link"));
     let maps = d["maps"].as_array().unwrap();
     assert!(!maps.is_empty());
