@@ -145,6 +145,24 @@ fn a_foxglove_websocket_client_receives_the_scans_of_a_sim_run() {
         String::from_utf8_lossy(&sim.stderr)
     );
 
+    // Watching changes nothing: the same run without --live writes the same trajectory.
+    let plain_dir = dir.path().join("plain");
+    let plain = Command::new(BIN)
+        .args(["-q", "sim", "--seed", "3", "--sensor", "urg-04lx", "--out"])
+        .arg(&plain_dir)
+        .stdin(Stdio::null())
+        .output()
+        .expect("robot-app runs");
+    assert_eq!(plain.status.success(), sim.status.success());
+    let printed = |o: &std::process::Output, d: &std::path::Path| {
+        String::from_utf8_lossy(&o.stdout).replace(d.to_str().unwrap(), "OUT")
+    };
+    assert_eq!(printed(&plain, &plain_dir), printed(&sim, &out_dir));
+    assert_eq!(
+        std::fs::read(plain_dir.join("trajectory.csv")).unwrap(),
+        std::fs::read(out_dir.join("trajectory.csv")).unwrap()
+    );
+
     // The channels and their schemas.
     let channels = &d["channels"];
     for (topic, schema) in [
