@@ -63,6 +63,7 @@ fn replay_args(file: std::path::PathBuf) -> ReplayArgs {
         profile: Default::default(),
         through_loop: true,
         out: None,
+        live: Default::default(),
     }
 }
 

@@ -3,6 +3,7 @@
 pub mod cmd;
 pub mod config;
 pub mod interrupt;
+pub mod live;
 pub mod logging;
 pub mod outputs;
 pub mod plot;

@@ -18,7 +18,7 @@ use scan_log::{
 use scan_types::{Pose2, Scan, ScanGeometry, WorldPoint};
 
 use crate::config::Params;
-use crate::runloop::{LoopRun, run_loop};
+use crate::runloop::{LoopRun, run_loop_legs};
 
 /// What a `--record` file holds.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, clap::ValueEnum)]
@@ -232,16 +232,42 @@ pub fn replay_loop(
     start: Pose2,
     goal: WorldPoint,
 ) -> anyhow::Result<LoopReplay> {
+    replay_loop_live(path, config, (start, goal), None)
+}
+
+/// [`replay_loop`] showing the scans, the loop's estimates, the recorded true poses and the
+/// legs on `live`.
+pub fn replay_loop_live(
+    path: &Path,
+    config: &Params,
+    (start, goal): (Pose2, WorldPoint),
+    live: Option<&mut crate::live::LiveView>,
+) -> anyhow::Result<LoopReplay> {
     let source = open_log(path, None)?;
     let (mut laser, truth) = RecordedLaser::new(source);
+    let geometry = *scan_types::LaserSource::geometry(&laser);
     let mut base = LoggingBase::new(NoMotion);
-    let run = run_loop(
+    let live = live.map(std::cell::RefCell::new);
+    let mut hook = |scan: &Scan, estimate: &Pose2| {
+        if let Some(v) = &live {
+            v.borrow_mut()
+                .scan(&geometry, scan, Some(*estimate), truth.pose());
+        }
+    };
+    let mut legs = |leg: &navigator::Leg| {
+        if let Some(v) = &live {
+            v.borrow_mut().leg(leg);
+        }
+    };
+    let observed = live.is_some();
+    let run = run_loop_legs(
         &mut laser,
         &mut base,
         config,
         (start, goal),
         Some(&truth),
-        None,
+        observed.then_some(&mut hook as crate::runloop::ScanPoseHook),
+        observed.then_some(&mut legs as crate::runloop::LegHook),
     )?;
     let scans_read = laser.source().scans_read();
     let mut scans_left = 0;

@@ -33,6 +33,7 @@ fn replay_args(file: PathBuf, topic: Option<&str>) -> ReplayArgs {
         profile: Default::default(),
         through_loop: false,
         out: None,
+        live: Default::default(),
     }
 }
 

@@ -23,6 +23,7 @@ fn replay_args(file: PathBuf) -> ReplayArgs {
         profile: Default::default(),
         through_loop: false,
         out: None,
+        live: Default::default(),
     }
 }
 

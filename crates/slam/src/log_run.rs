@@ -149,6 +149,11 @@ impl LogRun {
         }
     }
 
+    /// The scans placed so far, in order (the front end's poses).
+    pub fn placed(&self) -> &[Placed] {
+        &self.placed
+    }
+
     /// Ends the run; `malformed_records` is the count of records the reader skipped.
     pub fn finish(self, malformed_records: usize) -> SlamRun {
         let total_time_s = self.started.elapsed().as_secs_f64();

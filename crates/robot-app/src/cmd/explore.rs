@@ -43,6 +43,13 @@ pub struct ExploreArgs {
     /// Configuration and output folder (`--record` is not taken here).
     #[command(flatten)]
     pub options: super::LoopOptions,
+    /// Live view.
+    #[command(flatten)]
+    pub live: crate::live::LiveOptions,
+    /// With --live: play the exploration at this many times the simulated clock's speed (0: as
+    /// fast as it computes).
+    #[arg(long, value_name = "RATE", default_value_t = 1.0, requires = "live", value_parser = super::non_negative)]
+    pub live_rate: f64,
 }
 
 /// One frontier tried, as `explore.json` lists it.
@@ -191,9 +198,26 @@ pub fn run(args: ExploreArgs) -> anyhow::Result<()> {
         bail!("--max-goals and --legs-per-goal must be at least 1");
     }
 
+    let live = args
+        .live
+        .start(config.localiser.map_resolution_m)?
+        .map(|v| v.with_rate(args.live_rate));
+    let live = live.map(std::cell::RefCell::new);
+    let geometry = setup.sensor.geometry();
     let cpu0 = thread_cpu_time_s();
     let sim = setup.build()?;
     let (mut laser, mut base, truth) = sim.split();
+    let mut on_scan = |scan: &scan_types::Scan, estimate: &Pose2| {
+        if let Some(v) = &live {
+            v.borrow_mut()
+                .scan(&geometry, scan, Some(*estimate), Some(truth.pose()));
+        }
+    };
+    let mut on_leg = |leg: &navigator::Leg| {
+        if let Some(v) = &live {
+            v.borrow_mut().leg(leg);
+        }
+    };
     let run = explore_loop(
         &mut laser,
         &mut base,
@@ -201,9 +225,13 @@ pub fn run(args: ExploreArgs) -> anyhow::Result<()> {
         &params,
         setup.start,
         Some(&truth),
-        None,
+        Some(&mut on_scan),
+        Some(&mut on_leg),
     )?;
     let cpu = thread_cpu_time_s() - cpu0;
+    if let Some(v) = live {
+        v.into_inner().finish(Some(&run.exploration.outcome.grid));
+    }
     let ex = &run.exploration;
     let (coverage, map_accuracy) = map_quality(
         &setup.world,

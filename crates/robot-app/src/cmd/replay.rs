@@ -47,7 +47,14 @@ pub struct ReplayArgs {
     /// With `--loop`: write `trajectory.csv` and `map.pgm`/`map.yaml`/`map.png` here.
     #[arg(long, value_name = "DIR", requires = "through_loop")]
     pub out: Option<PathBuf>,
+    /// Live view (the scans with the log's poses; with `--loop` the loop's estimates and legs,
+    /// paced by --rate).
+    #[command(flatten)]
+    pub live: crate::live::LiveOptions,
 }
+
+/// Cell size of the map the live view builds from a log's poses, metres.
+const LIVE_MAP_RESOLUTION_M: f64 = 0.05;
 
 /// Runs `robot-app replay`, printing to stdout.
 pub fn run(args: ReplayArgs) -> anyhow::Result<()> {
@@ -71,6 +78,7 @@ pub fn run_to<W: Write>(args: &ReplayArgs, out: &mut W) -> anyhow::Result<()> {
         )?),
         None => None,
     };
+    let mut live = args.live.start(LIVE_MAP_RESOLUTION_M)?;
     let started = Instant::now();
     let mut first_stamp: Option<f64> = None;
     let mut k = 0usize;
@@ -96,7 +104,13 @@ pub fn run_to<W: Write>(args: &ReplayArgs, out: &mut W) -> anyhow::Result<()> {
         if let Some(r) = recorder.as_mut() {
             r.record_scan(&geometry, scan, rec.true_pose, rec.pose)?;
         }
+        if let Some(v) = live.as_mut() {
+            v.scan(&rec.geometry, scan, rec.pose, rec.true_pose);
+        }
         k += 1;
+    }
+    if let Some(v) = live {
+        v.finish(None);
     }
     out.flush()?;
     if let Some(r) = recorder {
@@ -114,9 +128,21 @@ pub fn run_to<W: Write>(args: &ReplayArgs, out: &mut W) -> anyhow::Result<()> {
 /// differ from the recorded ones or if the replayed run does not reach the target (as `sim`
 /// fails then; a cut recording ends in `sensor_failure`).
 fn run_loop<W: Write>(args: &ReplayArgs, out: &mut W) -> anyhow::Result<()> {
-    use crate::record::{read_settings, replay_loop};
+    use crate::record::{read_settings, replay_loop_live};
     let settings = read_settings(&args.file)?;
-    let replay = replay_loop(&args.file, &settings.config, settings.start, settings.goal)?;
+    let mut live = args
+        .live
+        .start(settings.config.localiser.map_resolution_m)?
+        .map(|v| v.with_rate(args.rate).with_goal(settings.goal));
+    let replay = replay_loop_live(
+        &args.file,
+        &settings.config,
+        (settings.start, settings.goal),
+        live.as_mut(),
+    )?;
+    if let Some(v) = live {
+        v.finish(Some(&replay.run.outcome.grid));
+    }
     let o = &replay.run.outcome;
     let log = &replay.run.log;
     writeln!(

@@ -8,7 +8,7 @@ use scan_types::{LaserSource, Pose2, Scan, WorldPoint};
 
 use super::sim::thread_cpu_time_s;
 use crate::outputs::{Reason, Summary};
-use crate::runloop::run_loop;
+use crate::runloop::run_loop_legs;
 
 /// Arguments of `robot-app run`.
 #[derive(Debug, Args)]
@@ -28,6 +28,9 @@ pub struct RunArgs {
     /// Configuration, output folder, recording.
     #[command(flatten)]
     pub options: super::LoopOptions,
+    /// Live view.
+    #[command(flatten)]
+    pub live: crate::live::LiveOptions,
 }
 
 /// Opens the base named by `--base SPEC` ([`robot_base::open_base`]).
@@ -62,6 +65,11 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
                 .with_context(|| format!("cannot record to {}", p.display()))
         })
         .transpose()?;
+    let live = args
+        .live
+        .start(config.localiser.map_resolution_m)?
+        .map(|v| v.with_goal(goal));
+    let live = std::cell::RefCell::new(live);
     let mut record_error: Option<String> = None;
     let mut hook = |scan: &Scan, estimate: &Pose2| {
         if let Some(r) = recorder.as_mut()
@@ -70,18 +78,30 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
         {
             record_error = Some(e.to_string());
         }
+        if let Some(v) = live.borrow_mut().as_mut() {
+            v.scan(&geometry, scan, Some(*estimate), None);
+        }
+    };
+    let mut legs = |leg: &navigator::Leg| {
+        if let Some(v) = live.borrow_mut().as_mut() {
+            v.leg(leg);
+        }
     };
     let wall = Instant::now();
     let cpu0 = thread_cpu_time_s();
-    let run = run_loop(
+    let run = run_loop_legs(
         &mut laser,
         &mut *base,
         &config,
         (start, goal),
         None,
         Some(&mut hook),
+        Some(&mut legs),
     )?;
     let outcome = run.outcome;
+    if let Some(v) = live.into_inner() {
+        v.finish(Some(&outcome.grid));
+    }
     let cpu = thread_cpu_time_s() - cpu0;
     if let Some(urg) = laser.urg_mut() {
         let _ = urg.stop();

@@ -9,7 +9,7 @@ use sim_laser::{GeodesicMap, SensorPreset, SimSetup, paper_start, paper_target};
 
 use crate::config::Params;
 use crate::outputs::{Reason, Summary, spl, write_summary};
-use crate::runloop::run_loop;
+use crate::runloop::run_loop_legs;
 use scan_log::write_trajectory;
 
 /// A simulated run counts as a success when the true position ends this close to the target.
@@ -41,6 +41,13 @@ pub struct SimArgs {
     /// Configuration, output folder, recording.
     #[command(flatten)]
     pub options: super::LoopOptions,
+    /// Live view.
+    #[command(flatten)]
+    pub live: crate::live::LiveOptions,
+    /// With --live: play the run at this many times the simulated clock's speed, so a viewer
+    /// can follow it (0: as fast as it computes).
+    #[arg(long, value_name = "RATE", default_value_t = 1.0, requires = "live", value_parser = super::non_negative)]
+    pub live_rate: f64,
 }
 
 /// Everything that defines one simulated run: the simulation, the target and the tuning.
@@ -112,12 +119,21 @@ pub fn simulate(
 /// Runs one simulated run (no files written), showing every scan with its true pose and the
 /// navigator's estimate to `observer`.
 pub fn simulate_observed(spec: &SimSpec, observer: Option<ScanObserver>) -> anyhow::Result<SimRun> {
-    simulate_inner(spec, observer, geodesic_of(spec))
+    simulate_inner(spec, observer, None, geodesic_of(spec))
+}
+
+/// [`simulate_observed`] that also shows every leg end to `legs`.
+pub fn simulate_watched(
+    spec: &SimSpec,
+    observer: Option<ScanObserver>,
+    legs: Option<crate::runloop::LegHook>,
+) -> anyhow::Result<SimRun> {
+    simulate_inner(spec, observer, legs, geodesic_of(spec))
 }
 
 /// Runs one simulated run (no files written) whose geodesic is already known.
 pub fn simulate_with_geodesic(spec: &SimSpec, geodesic_m: Option<f64>) -> anyhow::Result<SimRun> {
-    simulate_inner(spec, None, geodesic_m)
+    simulate_inner(spec, None, None, geodesic_m)
 }
 
 /// The free space of `spec`'s world for its robot, for geodesics; `None` (logged) when the
@@ -150,6 +166,7 @@ pub fn geodesic_of(spec: &SimSpec) -> Option<f64> {
 fn simulate_inner(
     spec: &SimSpec,
     mut observer: Option<ScanObserver>,
+    legs: Option<crate::runloop::LegHook>,
     geodesic_m: Option<f64>,
 ) -> anyhow::Result<SimRun> {
     let cpu0 = thread_cpu_time_s();
@@ -163,13 +180,14 @@ fn simulate_inner(
     };
     let hook: Option<crate::runloop::ScanPoseHook> =
         if observed { Some(&mut pose_hook) } else { None };
-    let run = run_loop(
+    let run = run_loop_legs(
         &mut laser,
         &mut base,
         &spec.config,
         (spec.setup.start, spec.goal),
         Some(&truth),
         hook,
+        legs,
     )?;
     let outcome = &run.outcome;
     let cpu = thread_cpu_time_s() - cpu0;
@@ -276,10 +294,19 @@ pub fn run(args: SimArgs) -> anyhow::Result<()> {
         anyhow::anyhow!("{e}; give a start and a goal in its free space with --start and --goal")
     })?;
     args.options.write_config(&spec.config)?;
-    let run = match &args.options.record {
-        None => simulate(&spec, None)?,
-        Some(path) => record_run_as(&spec, path, args.options.profile)?,
-    };
+    let mut live = args
+        .live
+        .start(spec.config.localiser.map_resolution_m)?
+        .map(|v| v.with_rate(args.live_rate).with_goal(goal));
+    let record = args
+        .options
+        .record
+        .as_deref()
+        .map(|p| (p, args.options.profile));
+    let run = run_with(&spec, record, live.as_mut())?;
+    if let Some(v) = live {
+        v.finish(Some(&run.outcome.grid));
+    }
     let title = format!(
         "method {} — {} world, seed {}: {}",
         spec.config.method, spec.setup.world_name, spec.setup.seed, run.summary.reason
@@ -335,6 +362,29 @@ pub fn record_run_as(
     path: &Path,
     profile: crate::record::RecordProfile,
 ) -> anyhow::Result<SimRun> {
+    run_with(spec, Some((path, profile)), None)
+}
+
+/// Runs `spec`, recording it as [`record_run_as`] does when `record` names a file and a
+/// profile, and showing it on `live`.
+pub fn run_with(
+    spec: &SimSpec,
+    record: Option<(&Path, crate::record::RecordProfile)>,
+    live: Option<&mut crate::live::LiveView>,
+) -> anyhow::Result<SimRun> {
+    let Some((path, profile)) = record else {
+        let Some(live) = live else {
+            return simulate(spec, None);
+        };
+        let geometry = spec.setup.sensor.geometry();
+        let live = std::cell::RefCell::new(live);
+        let mut hook = |scan: &scan_types::Scan, truth: Pose2, estimate: Pose2| {
+            live.borrow_mut()
+                .scan(&geometry, scan, Some(estimate), Some(truth));
+        };
+        let mut legs = |leg: &navigator::Leg| live.borrow_mut().leg(leg);
+        return simulate_watched(spec, Some(&mut hook), Some(&mut legs));
+    };
     let setup = &spec.setup;
     let geometry = setup.sensor.geometry();
     let mut recorder = crate::record::Recorder::create_profile(path, &geometry, profile)
@@ -350,14 +400,24 @@ pub fn record_run_as(
     };
     recorder.write_metadata(scan_log::RUN_METADATA, &settings.to_metadata())?;
     let mut err: Option<anyhow::Error> = None;
+    let live = live.map(std::cell::RefCell::new);
     let mut hook = |scan: &scan_types::Scan, truth: Pose2, estimate: Pose2| {
         if err.is_none()
             && let Err(e) = recorder.record_scan(&geometry, scan, Some(truth), Some(estimate))
         {
             err = Some(anyhow::anyhow!("recording to {}: {e}", path.display()));
         }
+        if let Some(v) = &live {
+            v.borrow_mut()
+                .scan(&geometry, scan, Some(estimate), Some(truth));
+        }
     };
-    let run = simulate_observed(spec, Some(&mut hook))?;
+    let mut legs = |leg: &navigator::Leg| {
+        if let Some(v) = &live {
+            v.borrow_mut().leg(leg);
+        }
+    };
+    let run = simulate_watched(spec, Some(&mut hook), Some(&mut legs))?;
     if let Some(e) = err {
         return Err(e);
     }

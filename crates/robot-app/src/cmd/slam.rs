@@ -43,6 +43,9 @@ pub struct SlamArgs {
     /// Rays enter the map up to this range, metres.
     #[arg(long, default_value_t = 20.0)]
     pub max_range: f64,
+    /// Live view (the front end's poses as scans are placed; the final map at the end).
+    #[command(flatten)]
+    pub live: crate::live::LiveOptions,
 }
 
 /// Front-end and loop-closure parameters: the defaults overridden by a TOML file (front-end
@@ -120,6 +123,18 @@ pub fn run_log_topic(
     params: &FrontEndParams,
     loops: Option<&LoopParams>,
 ) -> anyhow::Result<SlamRun> {
+    run_log_live(path, topic, params, loops, None)
+}
+
+/// [`run_log_topic`] showing every scan on `live`, with the front end's pose of it when the
+/// scan was placed.
+pub fn run_log_live(
+    path: &Path,
+    topic: Option<&str>,
+    params: &FrontEndParams,
+    loops: Option<&LoopParams>,
+    mut live: Option<&mut crate::live::LiveView>,
+) -> anyhow::Result<SlamRun> {
     let options = LogOptions {
         topic: topic.map(str::to_string),
         ..LogOptions::default()
@@ -136,7 +151,12 @@ pub fn run_log_topic(
             Err(e) => return Err(e).context("reading the log"),
         };
         progress.tick();
+        let placed = run.placed().len();
         run.add(rec.line, &rec.geometry, &rec.scan, rec.pose);
+        if let Some(v) = live.as_deref_mut() {
+            let estimate = run.placed().get(placed).map(|p| p.pose);
+            v.scan(&rec.geometry, &rec.scan, estimate, None);
+        }
     }
     let run = match loops {
         Some(l) => run
@@ -181,8 +201,18 @@ pub fn run(args: SlamArgs) -> anyhow::Result<()> {
     super::check_map_options(args.resolution, args.max_range)?;
     let (params, loops) = load_params(args.config.as_deref())?;
     let loops = (!args.no_loop_closure).then_some(&loops);
-    let mut run = run_log_topic(&args.log, args.topic.as_deref(), &params, loops)?;
+    let mut live = args.live.start(args.resolution)?;
+    let mut run = run_log_live(
+        &args.log,
+        args.topic.as_deref(),
+        &params,
+        loops,
+        live.as_mut(),
+    )?;
     write_outputs(&args.out, &mut run, args.resolution, args.max_range)?;
+    if let Some(v) = live {
+        v.finish(Some(&run.map(args.resolution, args.max_range)));
+    }
     let r = &run.report;
     let closures = r.loop_closure.as_ref().map_or(String::new(), |l| {
         format!(

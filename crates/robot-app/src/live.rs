@@ -1,0 +1,510 @@
+//! `--live [ADDR:PORT]`: a Foxglove WebSocket server (the official `foxglove` crate) that shows
+//! a run while it happens to Foxglove, Lichtblick or any client of the `foxglove.sdk.v1`
+//! protocol. See `docs/live-view.md`.
+//!
+//! Topics (protobuf, Foxglove schemas): `/scan` (`foxglove.LaserScan`, frame `base_link`),
+//! `/pose_estimate` and, in the simulator, `/pose_truth` (`foxglove.PoseInFrame`, frame `map`),
+//! `/tf` (`foxglove.FrameTransforms`, map -> base_link by the estimate), `/map`
+//! (`foxglove.Grid`, occupancy 100 / 0 / -1 as ROS maps) and `/markers`
+//! (`foxglove.SceneUpdate`: the target, landmarks and points B).
+//!
+//! A run never waits for a client unless `--live-wait` asks it to, and never fails because
+//! of one: messages for a slow or absent client are dropped by the server.
+
+use std::time::{Duration, Instant};
+
+use anyhow::Context as _;
+use clap::Args;
+use foxglove::messages::{
+    Color, CubePrimitive, CylinderPrimitive, FrameTransform, FrameTransforms, Grid, LaserScan,
+    PackedElementField, Pose, PoseInFrame, Quaternion, SceneEntity, SceneUpdate, SpherePrimitive,
+    Timestamp, Vector2, Vector3, packed_element_field::NumericType,
+};
+use foxglove::{Channel, Context, WebSocketServerHandle};
+use localiser::OccupancyGrid;
+use scan_types::{Pose2, RayStatus, Scan, ScanGeometry, WorldPoint};
+
+/// The address `--live` serves on when given without one (Foxglove's usual port).
+pub const DEFAULT_ADDR: &str = "127.0.0.1:8765";
+
+/// Topic of the laser scans.
+pub const SCAN_TOPIC: &str = "/scan";
+/// Topic of the estimated pose.
+pub const ESTIMATE_TOPIC: &str = "/pose_estimate";
+/// Topic of the simulator's true pose.
+pub const TRUTH_TOPIC: &str = "/pose_truth";
+/// Topic of the transforms (map -> base_link).
+pub const TF_TOPIC: &str = "/tf";
+/// Topic of the occupancy grid.
+pub const MAP_TOPIC: &str = "/map";
+/// Topic of the target, landmarks and points B.
+pub const MARKERS_TOPIC: &str = "/markers";
+
+/// The map frame.
+const MAP_FRAME: &str = "map";
+/// The robot's (and the laser's) frame.
+const BASE_FRAME: &str = "base_link";
+/// The map is sent at most this often between leg ends.
+const MAP_PERIOD: Duration = Duration::from_secs(1);
+
+/// How long the server stays up after the run when a client is connected, so that the last
+/// messages (the final map) reach it.
+const LINGER: Duration = Duration::from_secs(1);
+
+/// `--live` and `--live-wait`, shared by `sim`, `run`, `replay` and `slam`.
+#[derive(Debug, Clone, Default, Args)]
+pub struct LiveOptions {
+    /// Serve a live view of the run (Foxglove WebSocket protocol) on ADDR:PORT; without a
+    /// value on 127.0.0.1:8765. Open Foxglove or Lichtblick and connect to
+    /// ws://ADDR:PORT (see docs/live-view.md).
+    #[arg(
+        long,
+        value_name = "ADDR:PORT",
+        num_args = 0..=1,
+        default_missing_value = DEFAULT_ADDR
+    )]
+    pub live: Option<String>,
+    /// With --live: before the run starts, wait up to SECONDS for a client to subscribe to a
+    /// topic (then start anyway), so that a viewer sees the run from its first scan.
+    #[arg(long, value_name = "SECONDS", requires = "live", value_parser = crate::cmd::non_negative)]
+    pub live_wait: Option<f64>,
+}
+
+impl LiveOptions {
+    /// Starts the server when `--live` is given (waiting for a client if `--live-wait` says
+    /// so); `map_resolution_m` is the cell size of the map it builds from the scans.
+    pub fn start(&self, map_resolution_m: f64) -> anyhow::Result<Option<LiveView>> {
+        let Some(addr) = &self.live else {
+            return Ok(None);
+        };
+        let view = LiveView::start(addr, map_resolution_m)?;
+        if let Some(s) = self.live_wait {
+            view.wait_for_subscriber(Duration::from_secs_f64(s.min(86_400.0)));
+        }
+        Ok(Some(view))
+    }
+}
+
+/// Splits `ADDR:PORT` (`[v6]:PORT` for IPv6) into a host and a port.
+pub fn parse_addr(text: &str) -> anyhow::Result<(String, u16)> {
+    let bad = || anyhow::anyhow!("--live {text}: expected ADDR:PORT, e.g. {DEFAULT_ADDR}");
+    let (host, port) = text.rsplit_once(':').ok_or_else(bad)?;
+    let host = host.trim_start_matches('[').trim_end_matches(']');
+    if host.is_empty() {
+        return Err(bad());
+    }
+    let port: u16 = port.parse().map_err(|_| bad())?;
+    Ok((host.to_string(), port))
+}
+
+/// A running live-view server and the channels it publishes on.
+pub struct LiveView {
+    /// The channels' context, kept for as long as they publish.
+    _ctx: std::sync::Arc<Context>,
+    addr: String,
+    server: Option<WebSocketServerHandle>,
+    scan: Channel<LaserScan>,
+    estimate: Channel<PoseInFrame>,
+    truth: Channel<PoseInFrame>,
+    tf: Channel<FrameTransforms>,
+    map: Channel<Grid>,
+    markers: Channel<SceneUpdate>,
+    grid: OccupancyGrid,
+    map_sent: Option<Instant>,
+    stamp_s: f64,
+    goal: Option<WorldPoint>,
+    landmarks: Vec<WorldPoint>,
+    points_b: Vec<WorldPoint>,
+    pace: Option<Pace>,
+    scans: u64,
+}
+
+/// Pacing of the scans by their own clock.
+struct Pace {
+    rate: f64,
+    started: Instant,
+    first_stamp_s: Option<f64>,
+}
+
+impl LiveView {
+    /// Starts serving on `addr` (`ADDR:PORT`); `map_resolution_m` is the cell size of the map
+    /// built from the scans and their estimates.
+    pub fn start(addr: &str, map_resolution_m: f64) -> anyhow::Result<LiveView> {
+        let (host, port) = parse_addr(addr)?;
+        let ctx = Context::new();
+        let server = ctx
+            .websocket_server()
+            .name(format!("goalseek robot-app {}", env!("CARGO_PKG_VERSION")))
+            .bind(host, port)
+            .start_blocking()
+            .with_context(|| {
+                format!(
+                    "--live {addr}: cannot serve the live view there (the port is taken, or the address is not one of this machine's); give another with --live ADDR:PORT"
+                )
+            })?;
+        let bound = format!("{addr} (port {})", server.port());
+        tracing::info!("live view on ws://{addr}: connect Foxglove or Lichtblick to it");
+        Ok(LiveView {
+            _ctx: ctx.clone(),
+            addr: bound,
+            server: Some(server),
+            scan: ctx.channel_builder(SCAN_TOPIC).build(),
+            estimate: ctx.channel_builder(ESTIMATE_TOPIC).build(),
+            truth: ctx.channel_builder(TRUTH_TOPIC).build(),
+            tf: ctx.channel_builder(TF_TOPIC).build(),
+            map: ctx.channel_builder(MAP_TOPIC).build(),
+            markers: ctx.channel_builder(MARKERS_TOPIC).build(),
+            grid: OccupancyGrid::new(map_resolution_m),
+            map_sent: None,
+            stamp_s: 0.0,
+            goal: None,
+            landmarks: Vec::new(),
+            points_b: Vec::new(),
+            pace: None,
+            scans: 0,
+        })
+    }
+
+    /// Paces the scans by their time stamps at `rate` times real time (0: no waiting).
+    pub fn with_rate(mut self, rate: f64) -> Self {
+        self.pace = (rate > 0.0).then_some(Pace {
+            rate,
+            started: Instant::now(),
+            first_stamp_s: None,
+        });
+        self
+    }
+
+    /// Shows the target among the markers.
+    pub fn with_goal(mut self, goal: WorldPoint) -> Self {
+        self.goal = Some(goal);
+        self
+    }
+
+    /// The port the server listens on.
+    pub fn port(&self) -> Option<u16> {
+        self.server.as_ref().map(WebSocketServerHandle::port)
+    }
+
+    /// True when a client subscribes to any topic.
+    fn subscribed(&self) -> bool {
+        self.scan.has_sinks()
+            || self.estimate.has_sinks()
+            || self.truth.has_sinks()
+            || self.tf.has_sinks()
+            || self.map.has_sinks()
+            || self.markers.has_sinks()
+    }
+
+    /// Waits up to `timeout` (or a Ctrl-C) for a client to subscribe to a topic.
+    pub fn wait_for_subscriber(&self, timeout: Duration) {
+        tracing::info!(
+            "live view: waiting up to {:.0} s for a client on ws://{}",
+            timeout.as_secs_f64(),
+            self.addr
+        );
+        let started = Instant::now();
+        while !self.subscribed() {
+            if started.elapsed() >= timeout || crate::interrupt::requested() {
+                tracing::warn!("live view: no client subscribed; starting without one");
+                return;
+            }
+            std::thread::sleep(Duration::from_millis(20));
+        }
+        // Let the client subscribe to the rest of the topics it asked for.
+        std::thread::sleep(Duration::from_millis(200));
+        tracing::info!("live view: a client subscribed; starting");
+    }
+
+    /// Publishes one scan with the estimate of its pose and, in the simulator, the true pose;
+    /// the estimate also enters the view's map.
+    pub fn scan(
+        &mut self,
+        geometry: &ScanGeometry,
+        scan: &Scan,
+        estimate: Option<Pose2>,
+        truth: Option<Pose2>,
+    ) {
+        self.pace(scan.host_time_s);
+        if scan.host_time_s.is_finite() && scan.host_time_s >= 0.0 {
+            self.stamp_s = scan.host_time_s;
+        }
+        let ts = timestamp(self.stamp_s);
+        let nanos = ts.total_nanos();
+        self.scans += 1;
+        self.scan
+            .log_with_time(&laser_scan(geometry, scan, ts), nanos);
+        if let Some(e) = estimate {
+            self.estimate.log_with_time(&pose_in_map(e, ts), nanos);
+            let tf = FrameTransforms {
+                transforms: vec![FrameTransform {
+                    timestamp: Some(ts),
+                    parent_frame_id: MAP_FRAME.into(),
+                    child_frame_id: BASE_FRAME.into(),
+                    translation: Some(vec3(e.x_m, e.y_m, 0.0)),
+                    rotation: Some(yaw(e.theta_rad)),
+                }],
+            };
+            self.tf.log_with_time(&tf, nanos);
+            self.grid.integrate(&e, geometry, scan);
+            if self.map_sent.is_none_or(|t| t.elapsed() >= MAP_PERIOD) {
+                self.send_own_map();
+            }
+        }
+        if let Some(t) = truth {
+            self.truth.log_with_time(&pose_in_map(t, ts), nanos);
+        }
+    }
+
+    /// Publishes a leg end: its landmark and point B join the markers, and the map is sent.
+    pub fn leg(&mut self, leg: &navigator::Leg) {
+        self.landmarks.extend(leg.landmark);
+        self.points_b.extend(leg.point_b);
+        self.send_markers();
+        self.send_own_map();
+    }
+
+    /// Publishes the map built from the scans so far.
+    fn send_own_map(&mut self) {
+        self.map_sent = Some(Instant::now());
+        publish_map(&self.map, &self.grid, self.stamp_s);
+    }
+
+    /// Publishes `grid` as the map (the run's own, at its end).
+    pub fn send_map(&mut self, grid: &OccupancyGrid) {
+        self.map_sent = Some(Instant::now());
+        publish_map(&self.map, grid, self.stamp_s);
+    }
+
+    /// Sends the target, landmarks and points B so far.
+    fn send_markers(&mut self) {
+        let ts = timestamp(self.stamp_s);
+        let entity = |id: &str| SceneEntity {
+            timestamp: Some(ts),
+            frame_id: MAP_FRAME.into(),
+            id: id.into(),
+            ..SceneEntity::default()
+        };
+        let mut entities = Vec::new();
+        if let Some(g) = self.goal {
+            entities.push(SceneEntity {
+                cylinders: vec![CylinderPrimitive {
+                    pose: Some(pose_at(g, 0.15)),
+                    size: Some(vec3(0.3, 0.3, 0.3)),
+                    bottom_scale: 1.0,
+                    top_scale: 1.0,
+                    color: Some(color(0.1, 0.7, 0.2)),
+                }],
+                ..entity("target")
+            });
+        }
+        entities.push(SceneEntity {
+            spheres: self
+                .landmarks
+                .iter()
+                .map(|p| SpherePrimitive {
+                    pose: Some(pose_at(*p, 0.1)),
+                    size: Some(vec3(0.2, 0.2, 0.2)),
+                    color: Some(color(0.9, 0.5, 0.0)),
+                })
+                .collect(),
+            ..entity("landmarks")
+        });
+        entities.push(SceneEntity {
+            cubes: self
+                .points_b
+                .iter()
+                .map(|p| CubePrimitive {
+                    pose: Some(pose_at(*p, 0.05)),
+                    size: Some(vec3(0.1, 0.1, 0.1)),
+                    color: Some(color(0.2, 0.4, 1.0)),
+                })
+                .collect(),
+            ..entity("points_b")
+        });
+        self.markers.log_with_time(
+            &SceneUpdate {
+                deletions: Vec::new(),
+                entities,
+            },
+            ts.total_nanos(),
+        );
+    }
+
+    /// Sleeps until the scan stamped `stamp_s` is due at the pacing rate.
+    fn pace(&mut self, stamp_s: f64) {
+        let Some(p) = self.pace.as_mut() else {
+            return;
+        };
+        if !stamp_s.is_finite() {
+            return;
+        }
+        let t0 = *p.first_stamp_s.get_or_insert(stamp_s);
+        let due = (stamp_s - t0) / p.rate;
+        let now = p.started.elapsed().as_secs_f64();
+        if due > now {
+            std::thread::sleep(Duration::from_secs_f64((due - now).min(60.0)));
+        }
+    }
+
+    /// Sends the final map (`grid`, or without one the map built from the scans) and the
+    /// markers, then shuts the server down.
+    pub fn finish(mut self, grid: Option<&OccupancyGrid>) {
+        match grid {
+            Some(g) => self.send_map(g),
+            None => self.send_own_map(),
+        }
+        self.send_markers();
+        self.shutdown();
+    }
+
+    fn shutdown(&mut self) {
+        if let Some(server) = self.server.take() {
+            let clients = server.client_count();
+            if clients > 0 {
+                // Stopping drops what the clients' queues still hold: let them drain first.
+                std::thread::sleep(LINGER);
+            }
+            server.stop().wait_blocking();
+            tracing::info!(
+                scans = self.scans,
+                clients,
+                "live view on {} closed",
+                self.addr
+            );
+        }
+    }
+}
+
+impl Drop for LiveView {
+    fn drop(&mut self) {
+        self.shutdown();
+    }
+}
+
+/// Publishes `grid` on `channel` stamped `stamp_s` (nothing for an empty grid).
+fn publish_map(channel: &Channel<Grid>, grid: &OccupancyGrid, stamp_s: f64) {
+    let ts = timestamp(stamp_s);
+    if let Some(msg) = grid_message(grid, ts) {
+        channel.log_with_time(&msg, ts.total_nanos());
+    }
+}
+
+/// Seconds as a Foxglove time stamp (0 for a negative or non-finite time).
+fn timestamp(s: f64) -> Timestamp {
+    Timestamp::try_from_epoch_secs_f64(s).unwrap_or_else(|_| Timestamp::new(0, 0))
+}
+
+fn vec3(x: f64, y: f64, z: f64) -> Vector3 {
+    Vector3 { x, y, z }
+}
+
+/// A turn of `theta_rad` about z.
+fn yaw(theta_rad: f64) -> Quaternion {
+    let h = theta_rad / 2.0;
+    Quaternion {
+        x: 0.0,
+        y: 0.0,
+        z: h.sin(),
+        w: h.cos(),
+    }
+}
+
+fn color(r: f64, g: f64, b: f64) -> Color {
+    Color { r, g, b, a: 1.0 }
+}
+
+/// A point at height `z_m`, unrotated.
+fn pose_at(p: WorldPoint, z_m: f64) -> Pose {
+    Pose {
+        position: Some(vec3(p.x_m(), p.y_m(), z_m)),
+        orientation: Some(yaw(0.0)),
+    }
+}
+
+fn pose_in_map(p: Pose2, ts: Timestamp) -> PoseInFrame {
+    PoseInFrame {
+        timestamp: Some(ts),
+        frame_id: MAP_FRAME.into(),
+        pose: Some(Pose {
+            position: Some(vec3(p.x_m, p.y_m, 0.0)),
+            orientation: Some(yaw(p.theta_rad)),
+        }),
+    }
+}
+
+/// A scan as `foxglove.LaserScan` in `base_link`: a ray with nothing in range reads +inf, a
+/// ray the sensor reported an error for reads NaN (as the ROS 2 profile writes them).
+fn laser_scan(geometry: &ScanGeometry, scan: &Scan, ts: Timestamp) -> LaserScan {
+    let ranges = scan
+        .ranges_m
+        .iter()
+        .zip(&scan.status)
+        .map(|(r, s)| match s {
+            RayStatus::Hit => *r,
+            RayStatus::MaxRange => f64::INFINITY,
+            RayStatus::Error(_) => f64::NAN,
+        })
+        .collect();
+    LaserScan {
+        timestamp: Some(ts),
+        frame_id: BASE_FRAME.into(),
+        pose: Some(Pose {
+            position: Some(vec3(0.0, 0.0, 0.0)),
+            orientation: Some(yaw(0.0)),
+        }),
+        start_angle: geometry.first_bearing_rad,
+        end_angle: geometry.last_bearing_rad(),
+        ranges,
+        intensities: scan
+            .intensities
+            .as_ref()
+            .map(|v| v.iter().map(|&i| f64::from(i)).collect())
+            .unwrap_or_default(),
+    }
+}
+
+/// The grid as `foxglove.Grid` in `map`: one int8 field `occupancy` (100 occupied, 0 free,
+/// -1 unknown), rows from the lowest y; `None` for an empty grid.
+fn grid_message(grid: &OccupancyGrid, ts: Timestamp) -> Option<Grid> {
+    let map = crate::record::ros2_map(grid)?;
+    let data: Vec<u8> = map.cells.iter().map(|&c| c as u8).collect();
+    Some(Grid {
+        timestamp: Some(ts),
+        frame_id: MAP_FRAME.into(),
+        pose: Some(Pose {
+            position: Some(vec3(map.origin_m.0, map.origin_m.1, 0.0)),
+            orientation: Some(yaw(0.0)),
+        }),
+        column_count: map.width,
+        cell_size: Some(Vector2 {
+            x: map.resolution_m,
+            y: map.resolution_m,
+        }),
+        row_stride: map.width,
+        cell_stride: 1,
+        fields: vec![PackedElementField {
+            name: "occupancy".into(),
+            offset: 0,
+            r#type: NumericType::Int8 as i32,
+        }],
+        data: data.into(),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn addresses() {
+        assert_eq!(
+            parse_addr("127.0.0.1:8765").unwrap(),
+            ("127.0.0.1".into(), 8765)
+        );
+        assert_eq!(parse_addr("[::1]:9000").unwrap(), ("::1".into(), 9000));
+        assert!(parse_addr("8765").is_err());
+        assert!(parse_addr("host:port").is_err());
+        assert!(parse_addr(":8765").is_err());
+    }
+}
