@@ -5,6 +5,7 @@ use std::path::PathBuf;
 
 use anyhow::{Context, bail};
 use clap::Args;
+use image::ImageEncoder;
 use localiser::{CellState, OccupancyGrid};
 use navigator::{ExploreEnd, ExploreParams, Reason};
 use scan_types::{Pose2, WorldPoint};
@@ -279,6 +280,11 @@ pub fn run(args: ExploreArgs) -> anyhow::Result<()> {
         start: pose_deg(&setup.start),
     };
     write_outputs(&args.options.out, &run, &summary, &setup.world_name)?;
+    write_truth_png(
+        &args.options.out.join("truth.png"),
+        &setup.world,
+        config.localiser.map_resolution_m,
+    )?;
     #[allow(clippy::print_stdout)]
     {
         println!(
@@ -309,6 +315,30 @@ pub fn run(args: ExploreArgs) -> anyhow::Result<()> {
         );
     }
     Ok(())
+}
+
+/// Writes the true world as a PNG at `cell_m` per pixel (obstacles black, free space white,
+/// north up), to put beside the explored `map.png`.
+fn write_truth_png(path: &std::path::Path, world: &World, cell_m: f64) -> anyhow::Result<()> {
+    let (lo, hi) = world.bounds();
+    let b = world.rasterise([lo.x_m(), lo.y_m()], [hi.x_m(), hi.y_m()], cell_m);
+    let mut pixels = vec![0u8; b.width * b.height];
+    for row in 0..b.height {
+        for col in 0..b.width {
+            let v = if b.occupied[row * b.width + col] { 0 } else { 254 };
+            pixels[(b.height - 1 - row) * b.width + col] = v;
+        }
+    }
+    let mut bytes = Vec::new();
+    image::codecs::png::PngEncoder::new(&mut bytes)
+        .write_image(
+            &pixels,
+            b.width as u32,
+            b.height as u32,
+            image::ExtendedColorType::L8,
+        )
+        .with_context(|| format!("encoding {}", path.display()))?;
+    write_atomic(path, &bytes)
 }
 
 fn pose_deg(p: &Pose2) -> [f64; 3] {

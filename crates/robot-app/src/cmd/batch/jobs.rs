@@ -181,10 +181,11 @@ fn world_jobs(w: &WorldEntry, plan: &Plan, jobs: &mut Vec<Job>) {
         return;
     }
     let sampler = PairSampler::new(&w.setup.world, w.kind, w.index, plan.room_m);
+    let mut missing = 0;
     for i in 0..plan.n_pairs {
         let seed = plan.seeds.start + i as u64;
         let Some((start, goal)) = sampler.pair(seed, plan.min_distance_m) else {
-            tracing::warn!(world = %w.setup.world_name, seed, "no start/target pair far enough apart");
+            missing += 1;
             continue;
         };
         for cfg in &plan.configs {
@@ -195,5 +196,14 @@ fn world_jobs(w: &WorldEntry, plan: &Plan, jobs: &mut Vec<Job>) {
                 spec: spec(start, goal, seed, cfg),
             });
         }
+    }
+    if missing > 0 {
+        // An error, so that `-q` still shows a world that lost its runs.
+        tracing::error!(
+            world = %w.setup.world_name,
+            "{missing} of {} pairs skipped: no start and target {} m apart in one free region; lower --min-distance",
+            plan.n_pairs,
+            plan.min_distance_m
+        );
     }
 }
