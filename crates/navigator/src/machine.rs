@@ -118,6 +118,8 @@ pub struct Navigator {
     legs: usize,
     /// Legs driven before the current goal was set ([`Navigator::retarget`]).
     legs_before_goal: usize,
+    /// Most legs toward the current goal ([`Params::leg_limit`]).
+    leg_limit: usize,
     first_leg: Option<(WorldPoint, WorldPoint)>,
     /// Where the robot stands and the hits seen from there (world frame) while it turns in
     /// place: a replan there still knows what has left the field of view.
@@ -164,6 +166,7 @@ impl Navigator {
         )?;
         let (detect_params, select_params, track_params) = params.landmark_params();
         let planner = Planner::new(params.planner_params());
+        let leg_limit = params.leg_limit(start.position(), goal);
         Ok(Self {
             expander: Expander::new(&geometry),
             clearances: vec![0.0; geometry.ray_count],
@@ -184,6 +187,7 @@ impl Navigator {
             path_length_m: 0.0,
             legs: 0,
             legs_before_goal: 0,
+            leg_limit,
             first_leg: None,
             spot: (start.position(), Vec::new()),
             failures: 0,
@@ -350,6 +354,7 @@ impl Navigator {
         self.goal = goal;
         self.end = None;
         self.legs_before_goal = self.legs;
+        self.leg_limit = self.params.leg_limit(self.estimate.position(), goal);
         self.failures = 0;
         self.narrow_misses = 0;
         self.stalled_legs = 0;
@@ -431,7 +436,7 @@ impl Navigator {
                 "estimate within tolerance of the target".into(),
             );
         }
-        if self.legs - self.legs_before_goal >= n.max_legs {
+        if self.legs - self.legs_before_goal >= self.leg_limit {
             let note = format!(
                 "{} legs driven, {to_goal:.2} m from the target by the estimate",
                 self.legs - self.legs_before_goal

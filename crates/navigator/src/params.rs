@@ -7,6 +7,7 @@
 use std::str::FromStr;
 
 use landmarks::{DetectParams, SelectParams, TrackParams};
+use scan_types::WorldPoint;
 use serde::{Deserialize, Serialize};
 
 use crate::NavigatorError;
@@ -173,8 +174,15 @@ pub struct LocaliserParams {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct LoopParams {
-    /// Most legs before the run gives up (reason leg_limit).
+    /// Most legs toward one target, however far it is: the run then ends as leg_limit.
     pub max_legs: usize,
+    /// Legs always allowed toward a target (when `max_legs` allows them).
+    #[serde(default = "default_min_legs")]
+    pub min_legs: usize,
+    /// Legs allowed per metre of the straight line from the start to the target, when that
+    /// is more than `min_legs`: the limit grows with the world.
+    #[serde(default)]
+    pub legs_per_m: f64,
     /// The estimate within this of the target counts as arrival, metres.
     pub goal_tolerance_m: f64,
     /// Planning failures in a row (no safe ray, no progress) before the goal is unreachable.
@@ -201,6 +209,10 @@ pub struct LoopParams {
     pub stall_share: f64,
     /// Stalled legs in a row that end the run as base_stalled.
     pub stall_legs: usize,
+}
+
+fn default_min_legs() -> usize {
+    60
 }
 
 /// Every tuning parameter of a run.
@@ -274,7 +286,9 @@ impl Params {
                 map_resolution_m: 0.05,
             },
             navigator: LoopParams {
-                max_legs: 60,
+                max_legs: 400,
+                min_legs: 60,
+                legs_per_m: 4.0,
                 goal_tolerance_m: 0.15,
                 max_failed_tries: 8,
                 recovery_turn_deg: 60.0,
@@ -312,6 +326,19 @@ impl Params {
             Method::Goalseek => Self::goalseek(),
             Method::Paper => Self::paper(),
         }
+    }
+
+    /// The leg limit of a run from `start` to `goal`: `legs_per_m` legs per metre of the
+    /// straight line between them, at least `min_legs` and at most `max_legs`.
+    pub fn leg_limit(&self, start: WorldPoint, goal: WorldPoint) -> usize {
+        let n = &self.navigator;
+        let scaled = (n.legs_per_m * start.distance_m(&goal)).ceil();
+        let wanted = if scaled.is_finite() {
+            (scaled.min(1e6) as usize).max(n.min_legs)
+        } else {
+            n.min_legs
+        };
+        wanted.min(n.max_legs)
     }
 
     /// Checks every value against its valid range ([`Params::ranges`]); the error names the
@@ -371,6 +398,8 @@ impl Params {
             ("localiser.turn_match_gate_m", z.turn_match_gate_m, 0.0, 5.0, true),
             ("localiser.map_resolution_m", z.map_resolution_m, 0.01, 1.0, false),
             ("navigator.max_legs", count(n.max_legs), 1.0, 1e6, false),
+            ("navigator.min_legs", count(n.min_legs), 1.0, 1e6, false),
+            ("navigator.legs_per_m", n.legs_per_m, 0.0, 1000.0, false),
             ("navigator.goal_tolerance_m", n.goal_tolerance_m, 0.0, 10.0, true),
             ("navigator.max_failed_tries", count(n.max_failed_tries), 1.0, 1000.0, false),
             ("navigator.recovery_turn_deg", n.recovery_turn_deg, 0.0, 180.0, true),
@@ -461,10 +490,29 @@ mod tests {
         assert_eq!(g.localiser.heading_rule, HeadingRule::ScanMatched);
         assert_eq!(p.robot.expansion_margin_m, 0.0);
         assert_eq!(g.robot.expansion_margin_m, 0.1);
-        assert_eq!(g.navigator.max_legs, 60);
+        assert_eq!(g.navigator.max_legs, 400);
         assert_eq!(p.robot.radius_m, 0.3);
         assert_eq!(Params::preset(Method::Paper), p);
         assert!(p.validate().is_ok() && g.validate().is_ok());
+    }
+
+    #[test]
+    fn the_leg_limit_grows_with_the_distance_to_the_target() {
+        let g = Params::goalseek();
+        let o = WorldPoint::new(0.0, 0.0);
+        // 4 legs per metre: 30 m allows 120 legs; 10 m (40) keeps the floor of 60; 200 m
+        // (800) is capped at 400.
+        assert_eq!(g.leg_limit(o, WorldPoint::new(30.0, 0.0)), 120);
+        assert_eq!(g.leg_limit(o, WorldPoint::new(6.0, 8.0)), 60);
+        assert_eq!(g.leg_limit(o, WorldPoint::new(15.1, 0.0)), 61);
+        assert_eq!(g.leg_limit(o, WorldPoint::new(200.0, 0.0)), 400);
+        // A cap below the floor wins (a test's max_legs = 1).
+        let mut one = g.clone();
+        one.navigator.max_legs = 1;
+        assert_eq!(one.leg_limit(o, WorldPoint::new(30.0, 0.0)), 1);
+        let mut fixed = g.clone();
+        fixed.navigator.legs_per_m = 0.0;
+        assert_eq!(fixed.leg_limit(o, WorldPoint::new(300.0, 0.0)), 60);
     }
 
     #[test]

@@ -325,7 +325,11 @@ fn write_truth_png(path: &std::path::Path, world: &World, cell_m: f64) -> anyhow
     let mut pixels = vec![0u8; b.width * b.height];
     for row in 0..b.height {
         for col in 0..b.width {
-            let v = if b.occupied[row * b.width + col] { 0 } else { 254 };
+            let v = if b.occupied[row * b.width + col] {
+                0
+            } else {
+                254
+            };
             pixels[(b.height - 1 - row) * b.width + col] = v;
         }
     }
