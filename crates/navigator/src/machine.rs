@@ -130,6 +130,14 @@ pub struct Navigator {
     state: State,
     pending: Action,
     end: Option<(Reason, String)>,
+    /// The online SLAM of `[localiser] slam` (`None` when off).
+    slam: Option<Box<slam::FrontEnd>>,
+    /// While driving: the last pose SLAM placed (or the leg's origin) and the commanded
+    /// travel there, metres.
+    slam_anchor: (Pose2, f64),
+    /// The pose SLAM gave the last scan fed to it while driving, and that scan's commanded
+    /// travel (`None` when it could not place it).
+    slam_leg_pose: Option<(Pose2, f64)>,
 }
 
 impl Navigator {
@@ -162,6 +170,12 @@ impl Navigator {
         )?;
         let (detect_params, select_params, track_params) = params.landmark_params();
         let planner = Planner::new(params.planner_params());
+        let slam = if params.localiser.slam {
+            let front = slam::FrontEnd::new(params.localiser.slam_front_end())?;
+            Some(Box::new(front))
+        } else {
+            None
+        };
         Ok(Self {
             expander: Expander::new(&geometry),
             clearances: vec![0.0; geometry.ray_count],
@@ -190,6 +204,9 @@ impl Navigator {
             state: State::Starting,
             pending: Action::Scan,
             end: None,
+            slam,
+            slam_anchor: (start, 0.0),
+            slam_leg_pose: None,
         })
     }
 
@@ -272,6 +289,9 @@ impl Navigator {
         let next = match std::mem::replace(&mut self.state, State::Finished) {
             State::Starting => {
                 let scan = scan.clone();
+                if let Some(pose) = self.slam_place(&scan, self.estimate) {
+                    self.estimate = pose;
+                }
                 self.integrate(&scan);
                 self.record(None, None, &scan);
                 self.plan_next(scan)
@@ -513,7 +533,8 @@ impl Navigator {
                 self.rotation_matched(&turn.before, after, m).unwrap_or(m)
             }
         };
-        self.estimate = self.estimate.rotated(turned);
+        let rotated = self.estimate.rotated(turned);
+        self.estimate = self.slam_place(after, rotated).unwrap_or(rotated);
         turn.before = after.clone();
         if turn.left > 0 {
             turn.left -= 1;
@@ -674,6 +695,8 @@ impl Navigator {
             let leg = limit.min(self.params.navigator.short_leg_m);
             (LegKind::Short, leg, self.any_landmark(&scan))
         };
+        self.slam_anchor = (origin, 0.0);
+        self.slam_leg_pose = None;
         let drive = Drive::new(self, kind, origin, limit_m, landmark, scan);
         self.drive_step(Box::new(drive))
     }
@@ -692,6 +715,10 @@ impl Navigator {
     /// The scan after a step (step 7): track the landmark, maybe stop at B, maybe a new
     /// keyframe.
     fn drive_scanned(&mut self, mut drive: Box<Drive>, scan: &Scan) -> Action {
+        let since = drive.commanded_m - self.slam_anchor.1;
+        if self.slam.is_some() && since >= self.params.localiser.slam_step_m - 1e-9 {
+            self.slam_drive_scan(scan, drive.commanded_m);
+        }
         if drive.scanned(self, scan) {
             self.drive_step(drive)
         } else {
@@ -704,6 +731,16 @@ impl Navigator {
         let mut drive = *drive;
         let rel = drive.travelled(self);
         self.estimate = drive.origin.compose(&rel);
+        if self.slam.is_some() && drive.commanded_m > 0.0 {
+            // The leg's last scan, placed by SLAM unless that was done on its step.
+            let placed = match self.slam_leg_pose {
+                Some((pose, at)) if at == drive.commanded_m => Some(pose),
+                _ => self.slam_drive_scan(&drive.last_scan, drive.commanded_m),
+            };
+            if let Some(pose) = placed {
+                self.estimate = pose;
+            }
+        }
         let judged = (drive.laser_measured, drive.commanded_m);
         let scan = drive.last_scan;
         self.integrate(&scan);
@@ -732,6 +769,40 @@ impl Navigator {
             self.failures = 0;
         }
         self.plan_next(scan)
+    }
+
+    /// Places `scan` by the online SLAM with the search centred on `prediction`; the placed
+    /// pose, or `None` when SLAM is off or could not place the scan.
+    fn slam_place(&mut self, scan: &Scan, prediction: Pose2) -> Option<Pose2> {
+        let front = self.slam.as_mut()?;
+        match front.add_scan_near(&self.geometry, scan, prediction) {
+            slam::Placement::Placed { pose, quality, .. } => {
+                tracing::debug!(
+                    dx = pose.x_m - prediction.x_m,
+                    dy = pose.y_m - prediction.y_m,
+                    dth_deg = scan_types::angle_diff_rad(pose.theta_rad, prediction.theta_rad)
+                        .to_degrees(),
+                    quality,
+                    "slam placed the scan"
+                );
+                Some(pose)
+            }
+            slam::Placement::Skipped { reason } => {
+                tracing::debug!(%reason, "slam could not place the scan; keeping the rules' pose");
+                None
+            }
+        }
+    }
+
+    /// Places a scan taken while driving, `commanded_m` into the leg: predicted from the
+    /// last placed pose and the travel commanded since.
+    fn slam_drive_scan(&mut self, scan: &Scan, commanded_m: f64) -> Option<Pose2> {
+        let (anchor, at) = self.slam_anchor;
+        let prediction = anchor.compose(&Pose2::new(commanded_m - at, 0.0, 0.0));
+        let placed = self.slam_place(scan, prediction);
+        self.slam_anchor = (placed.unwrap_or(prediction), commanded_m);
+        self.slam_leg_pose = placed.map(|p| (p, commanded_m));
+        placed
     }
 
     /// Counts a leg on which the laser saw less than `stall_share` of the commanded travel;

@@ -167,6 +167,63 @@ pub struct LocaliserParams {
     pub turn_match_gate_m: f64,
     /// Occupancy grid cell size, metres.
     pub map_resolution_m: f64,
+    /// Online SLAM: every turn chunk's scan, every `slam_step_m` of a drive and every leg's
+    /// last scan are placed against a submap of recent keyframes by the slam crate's
+    /// correlative scan-to-submap matching, searched around the pose the rules above give;
+    /// the placed pose becomes the estimate (a scan it cannot place keeps the rules' pose).
+    #[serde(default)]
+    pub slam: bool,
+    /// Half-width of the SLAM search around that pose, metres.
+    #[serde(default = "default_slam_window_m")]
+    pub slam_window_m: f64,
+    /// Half-width of the SLAM search around its heading, degrees.
+    #[serde(default = "default_slam_window_deg")]
+    pub slam_window_deg: f64,
+    /// While driving, a scan is placed by SLAM every this many metres commanded.
+    #[serde(default = "default_slam_step_m")]
+    pub slam_step_m: f64,
+    /// A placed scan becomes a keyframe of the SLAM submap this far from the last one,
+    /// metres (or turned 10 deg from it).
+    #[serde(default = "default_slam_keyframe_m")]
+    pub slam_keyframe_m: f64,
+    /// Keyframes in the SLAM submap (the oldest leaves when it is full).
+    #[serde(default = "default_slam_keyframes")]
+    pub slam_keyframes: usize,
+}
+
+fn default_slam_keyframe_m() -> f64 {
+    0.5
+}
+
+fn default_slam_keyframes() -> usize {
+    60
+}
+
+fn default_slam_window_m() -> f64 {
+    0.3
+}
+
+fn default_slam_window_deg() -> f64 {
+    8.0
+}
+
+fn default_slam_step_m() -> f64 {
+    0.25
+}
+
+impl LocaliserParams {
+    /// The slam front end's parameters for the online option: the library's defaults with
+    /// the search window narrowed to `slam_window_m` / `slam_window_deg` (the rules' pose is
+    /// a far better prediction than the offline constant-velocity model).
+    pub fn slam_front_end(&self) -> slam::FrontEndParams {
+        slam::FrontEndParams {
+            linear_window_m: self.slam_window_m,
+            angular_window_deg: self.slam_window_deg,
+            keyframe_distance_m: self.slam_keyframe_m,
+            submap_keyframes: self.slam_keyframes,
+            ..slam::FrontEndParams::default()
+        }
+    }
 }
 
 /// The loop itself.
@@ -272,6 +329,12 @@ impl Params {
                 turn_match_prior_m: 0.01,
                 turn_match_gate_m: 0.15,
                 map_resolution_m: 0.05,
+                slam: false,
+                slam_window_m: default_slam_window_m(),
+                slam_window_deg: default_slam_window_deg(),
+                slam_step_m: default_slam_step_m(),
+                slam_keyframe_m: default_slam_keyframe_m(),
+                slam_keyframes: default_slam_keyframes(),
             },
             navigator: LoopParams {
                 max_legs: 60,
@@ -370,6 +433,11 @@ impl Params {
             ("localiser.turn_match_prior_m", z.turn_match_prior_m, 0.0, 10.0, true),
             ("localiser.turn_match_gate_m", z.turn_match_gate_m, 0.0, 5.0, true),
             ("localiser.map_resolution_m", z.map_resolution_m, 0.01, 1.0, false),
+            ("localiser.slam_window_m", z.slam_window_m, 0.0, 1.6, true),
+            ("localiser.slam_window_deg", z.slam_window_deg, 0.0, 90.0, true),
+            ("localiser.slam_step_m", z.slam_step_m, 0.0, 10.0, true),
+            ("localiser.slam_keyframe_m", z.slam_keyframe_m, 0.0, 10.0, true),
+            ("localiser.slam_keyframes", count(z.slam_keyframes), 1.0, 10000.0, false),
             ("navigator.max_legs", count(n.max_legs), 1.0, 1e6, false),
             ("navigator.goal_tolerance_m", n.goal_tolerance_m, 0.0, 10.0, true),
             ("navigator.max_failed_tries", count(n.max_failed_tries), 1.0, 1000.0, false),

@@ -270,8 +270,30 @@ impl FrontEnd {
         &self.match_params
     }
 
-    /// Places the next scan (of `geometry`).
+    /// Places the next scan (of `geometry`), predicted by the constant-velocity model.
     pub fn add_scan(&mut self, geometry: &ScanGeometry, scan: &Scan) -> Placement {
+        self.add_scan_from(geometry, scan, None)
+    }
+
+    /// Places the next scan (of `geometry`) with the search centred on `prediction` (a pose
+    /// from a motion model, e.g. the commands a robot gave since its last scan) instead of
+    /// the constant-velocity model. The first scan is placed at `prediction` itself, so that
+    /// the poses are in the caller's frame.
+    pub fn add_scan_near(
+        &mut self,
+        geometry: &ScanGeometry,
+        scan: &Scan,
+        prediction: Pose2,
+    ) -> Placement {
+        self.add_scan_from(geometry, scan, Some(prediction))
+    }
+
+    fn add_scan_from(
+        &mut self,
+        geometry: &ScanGeometry,
+        scan: &Scan,
+        prediction: Option<Pose2>,
+    ) -> Placement {
         let points = thin_hits(geometry, scan, &self.params);
         if points.len() < self.params.min_points {
             return Placement::Skipped {
@@ -279,7 +301,7 @@ impl FrontEnd {
             };
         }
         let (Some(last), true) = (self.last, self.grid.is_some()) else {
-            let pose = Pose2::default();
+            let pose = prediction.unwrap_or_default();
             self.place(pose, geometry, scan, &points, true);
             return Placement::Placed {
                 pose,
@@ -293,7 +315,7 @@ impl FrontEnd {
         let step = self
             .before_last
             .map_or(Pose2::default(), |b| b.inverse().compose(&last));
-        let guess = last.compose(&step);
+        let guess = prediction.unwrap_or_else(|| last.compose(&step));
         if let Some((pose, quality)) = self.local(geometry, scan, &points, guess) {
             let keyframe = self.is_keyframe(&pose);
             self.place(pose, geometry, scan, &points, keyframe);
@@ -310,7 +332,7 @@ impl FrontEnd {
             step.y_m,
             step.theta_rad * self.params.rotation_prediction,
         );
-        let centre = last.compose(&damped);
+        let centre = prediction.unwrap_or_else(|| last.compose(&damped));
         let window = Window {
             linear_m: self.params.linear_window_m,
             angular_rad: self.params.angular_window_deg.to_radians(),

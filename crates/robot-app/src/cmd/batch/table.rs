@@ -11,7 +11,7 @@ use slam::eval::{median, percentile};
 pub struct BatchRow {
     /// Group the run is reported in.
     pub group: String,
-    /// World kind: `paper`, `random`, `corridor` or `file`.
+    /// World kind: `paper`, `random`, `corridor`, `clutter` or `file`.
     pub kind: WorldKind,
     /// World name.
     pub world: String,
