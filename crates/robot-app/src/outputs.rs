@@ -57,6 +57,20 @@ pub struct Summary {
     pub final_truth: Option<[f64; 3]>,
     /// A one-line note on how the run ended (the error, for a failure).
     pub note: String,
+    /// The navigator's position uncertainty at the end of every leg (leg 0 = the start),
+    /// metres: its own error model, no truth needed.
+    pub position_sigma_m: Vec<f64>,
+    /// The navigator's heading uncertainty at the end of every leg, degrees.
+    pub heading_sigma_deg: Vec<f64>,
+}
+
+/// The navigator's position and heading uncertainty at each leg end of `outcome`.
+pub fn leg_sigmas(outcome: &navigator::Outcome) -> (Vec<f64>, Vec<f64>) {
+    outcome
+        .legs
+        .iter()
+        .map(|l| (l.position_sigma_m, l.heading_sigma_deg))
+        .unzip()
 }
 
 /// One run's term of Success weighted by Path Length (Anderson et al. 2018):

@@ -130,6 +130,7 @@ fn summary_of(
     cpu_time_s: f64,
 ) -> Summary {
     let deg = |p: &Pose2| [p.x_m, p.y_m, p.theta_rad.to_degrees()];
+    let (position_sigma_m, heading_sigma_deg) = crate::outputs::leg_sigmas(outcome);
     Summary {
         reached: outcome.reason == Reason::Reached,
         reason: outcome.reason,
@@ -152,5 +153,7 @@ fn summary_of(
         final_estimate: deg(&outcome.estimate),
         final_truth: None,
         note: outcome.note.clone(),
+        position_sigma_m,
+        heading_sigma_deg,
     }
 }

@@ -195,6 +195,7 @@ fn simulate_inner(
             "the estimate reached the target but the robot is {goal_distance:.2} m from it"
         );
     }
+    let (position_sigma_m, heading_sigma_deg) = crate::outputs::leg_sigmas(outcome);
     let summary = Summary {
         reached,
         reason,
@@ -217,6 +218,8 @@ fn simulate_inner(
         final_estimate: pose_deg(&outcome.estimate),
         final_truth: Some(pose_deg(&t)),
         note,
+        position_sigma_m,
+        heading_sigma_deg,
     };
     Ok(SimRun {
         summary,

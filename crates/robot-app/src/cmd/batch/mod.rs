@@ -241,6 +241,7 @@ fn row_of(job: &Job, run: SimRun) -> BatchRow {
         geodesic_m: s.geodesic_m,
         spl: s.spl,
         cpu_time_s: s.cpu_time_s,
+        final_position_sigma_m: s.position_sigma_m.last().copied(),
         note: s.note,
     }
 }
