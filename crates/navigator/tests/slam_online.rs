@@ -106,3 +106,57 @@ fn slam_window_is_validated() {
     let e = p.validate().unwrap_err().to_string();
     assert!(e.contains("localiser.slam_window_deg"), "{e}");
 }
+
+/// One straight leg in an empty 6 m x 4 m room, from (1, 2) facing +x to (3, 2), with
+/// nothing measured by the laser (the paper's rules): the error model by hand.
+fn straight_leg(max_sigma_m: f64) -> navigator::Outcome {
+    let g = ScanGeometry::paper();
+    let segs = boxed(0.0, 0.0, 6.0, 4.0);
+    let mut p = trusting(false);
+    p.navigator.flag_uncertain_arrival = true;
+    p.navigator.arrival_max_sigma_m = max_sigma_m;
+    let start = Pose2::new(1.0, 2.0, 0.0);
+    let mut nav = Navigator::new(p, g, start, WorldPoint::new(3.0, 2.0)).unwrap();
+    let mut truth = start;
+    for _ in 0..10_000 {
+        match nav.pending() {
+            Action::Scan => {
+                nav.on_scan(&scan_at(&g, &segs, truth.x_m, truth.y_m, truth.theta_rad));
+            }
+            Action::Rotate { angle_rad } => {
+                truth = truth.rotated(angle_rad);
+                nav.on_motion_done();
+            }
+            Action::Forward { distance_m } => {
+                truth = truth.compose(&Pose2::new(distance_m, 0.0, 0.0));
+                nav.on_motion_done();
+            }
+            Action::Finish(_) => break,
+        }
+    }
+    nav.into_outcome()
+}
+
+#[test]
+fn leg_uncertainty_follows_the_error_model_and_flags_an_uncertain_arrival() {
+    // The plan's turn onto the target (one chunk, unmeasured: heading rule commanded) adds
+    // turn_sigma_deg = 1 deg; the 2 m final leg, unmeasured (travel rule landmark, nothing
+    // tracked), adds 0.02 x 2 = 0.04 m of its own and 2 m x 1 deg = 0.0349 m of lateral error:
+    // 0.0749 m at the target.
+    let o = straight_leg(0.1);
+    assert_eq!(o.reason, Reason::Reached, "{}", o.note);
+    assert_eq!(o.legs.len(), 2);
+    assert_eq!(o.legs[0].position_sigma_m, 0.0);
+    let last = &o.legs[1];
+    let expected = 0.04 + 2.0 * 1f64.to_radians();
+    assert!(
+        (last.position_sigma_m - expected).abs() < 0.003,
+        "{} vs {expected}",
+        last.position_sigma_m
+    );
+    assert!((last.heading_sigma_deg - 1.0).abs() < 1e-9);
+    // With a 0.05 m bound the same arrival is flagged, not claimed.
+    let o = straight_leg(0.05);
+    assert_eq!(o.reason, Reason::UncertainArrival, "{}", o.note);
+    assert!(o.note.contains("uncertainty"), "{}", o.note);
+}
