@@ -22,13 +22,6 @@ fn allowed() -> BTreeMap<&'static str, BTreeSet<&'static str>> {
         "navigator",
         "slam",
     ];
-    const METHOD: &[&str] = &[
-        "scan-types",
-        "expansion",
-        "planner",
-        "landmarks",
-        "localiser",
-    ];
     let mut with_app = all.to_vec();
     with_app.push("robot-app");
     let table: &[(&str, &[&str])] = &[
@@ -47,8 +40,19 @@ fn allowed() -> BTreeMap<&'static str, BTreeSet<&'static str>> {
         ("planner", &["scan-types", "expansion"]),
         // Laser-only SLAM refines its correlative matches with the localiser's ICP.
         ("slam", &["scan-types", "localiser"]),
-        // Layer 3: the loop, on the method's parts only (no sensor, simulator or log).
-        ("navigator", METHOD),
+        // Layer 3: the loop, on the method's parts and the laser-only SLAM it can localise
+        // with (no sensor, simulator or log).
+        (
+            "navigator",
+            &[
+                "scan-types",
+                "expansion",
+                "planner",
+                "landmarks",
+                "localiser",
+                "slam",
+            ],
+        ),
         // Layer 4: the program, and the root package that owns tests/ and benches/.
         ("robot-app", &all),
         ("goalseek", &with_app),

@@ -226,6 +226,19 @@ fn matched(
             }
         }
     }
+    // The base drives straight: a match that turned the robot more than the base can while
+    // driving paired the wrong points (a lone post or a short wall seen from a new angle).
+    let max_turn = l.drive_max_turn_deg.to_radians();
+    if let Some(m) = best.as_ref()
+        && m.pose.theta_rad.abs() > max_turn
+    {
+        tracing::debug!(
+            ahead_m,
+            dth_deg = m.pose.theta_rad.to_degrees(),
+            "scan match turned the robot on a straight drive; refused"
+        );
+        best = None;
+    }
     match best {
         Some(m) => {
             tracing::debug!(

@@ -17,6 +17,9 @@ pub enum NavigatorError {
     /// A method name that is not a preset.
     #[error("unknown method '{0}' (expected paper or goalseek)")]
     UnknownMethod(String),
+    /// The online SLAM's parameters were refused.
+    #[error("online slam: {0}")]
+    Slam(#[from] slam::SlamError),
     /// A start pose or goal that is not finite or lies beyond [`crate::MAX_COORD_M`].
     #[error("{what} ({value}) must be finite, with coordinates within +-1000 km")]
     NotFinite {

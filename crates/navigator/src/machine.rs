@@ -87,6 +87,11 @@ enum State {
 const NARROW_MISS_M: f64 = 0.05;
 /// Turns again toward a missed narrow passage before driving what is free.
 const NARROW_RETRIES: usize = 6;
+/// The most a SLAM refinement may move beyond the search window, metres (the slam front
+/// end's `max_refine_shift_m`)...
+const SLAM_REFINE_SHIFT_M: f64 = 0.2;
+/// ... and turn, degrees.
+const SLAM_REFINE_TURN_DEG: f64 = 2.0;
 
 /// The goal-seeking loop of `docs/method.md` for one run, from `start` to `goal`.
 ///
@@ -134,6 +139,18 @@ pub struct Navigator {
     state: State,
     pending: Action,
     end: Option<(Reason, String)>,
+    /// The online SLAM of `[localiser] slam` (`None` when off).
+    slam: Option<Box<slam::FrontEnd>>,
+    /// While driving: the last pose SLAM placed (or the leg's origin) and the commanded
+    /// travel there, metres.
+    slam_anchor: (Pose2, f64),
+    /// The pose SLAM gave the last scan fed to it while driving, and that scan's commanded
+    /// travel (`None` when it could not place it).
+    slam_leg_pose: Option<(Pose2, f64)>,
+    /// The estimate's heading uncertainty (one standard deviation), radians.
+    sigma_heading_rad: f64,
+    /// The estimate's position uncertainty (one standard deviation), metres.
+    sigma_position_m: f64,
 }
 
 impl Navigator {
@@ -167,6 +184,12 @@ impl Navigator {
         let (detect_params, select_params, track_params) = params.landmark_params();
         let planner = Planner::new(params.planner_params());
         let leg_limit = params.leg_limit(start.position(), goal);
+        let slam = if params.localiser.slam {
+            let front = slam::FrontEnd::new(params.localiser.slam_front_end())?;
+            Some(Box::new(front))
+        } else {
+            None
+        };
         Ok(Self {
             expander: Expander::new(&geometry),
             clearances: vec![0.0; geometry.ray_count],
@@ -197,6 +220,11 @@ impl Navigator {
             state: State::Starting,
             pending: Action::Scan,
             end: None,
+            slam,
+            slam_anchor: (start, 0.0),
+            slam_leg_pose: None,
+            sigma_heading_rad: 0.0,
+            sigma_position_m: 0.0,
         })
     }
 
@@ -279,6 +307,9 @@ impl Navigator {
         let next = match std::mem::replace(&mut self.state, State::Finished) {
             State::Starting => {
                 let scan = scan.clone();
+                if let Some(pose) = self.slam_place(&scan, self.estimate) {
+                    self.estimate = pose;
+                }
                 self.integrate(&scan);
                 // After a retarget the last leg's end is already recorded.
                 if self.legs_log.is_empty() {
@@ -418,6 +449,8 @@ impl Navigator {
             landmark,
             point_b,
             scan_points,
+            position_sigma_m: self.sigma_position_m,
+            heading_sigma_deg: self.sigma_heading_rad.to_degrees(),
         });
     }
 
@@ -431,6 +464,13 @@ impl Navigator {
         let to_goal = self.estimate.position().distance_m(&self.goal);
         let n = &self.params.navigator;
         if to_goal <= n.goal_tolerance_m {
+            if n.flag_uncertain_arrival && self.sigma_position_m > n.arrival_max_sigma_m {
+                let note = format!(
+                    "the estimate reached the target but its position uncertainty is {:.2} m (more than {:.2} m)",
+                    self.sigma_position_m, n.arrival_max_sigma_m
+                );
+                return self.finish(Reason::UncertainArrival, note);
+            }
             return self.finish(
                 Reason::Reached,
                 "estimate within tolerance of the target".into(),
@@ -540,27 +580,44 @@ impl Navigator {
     fn turn_scanned(&mut self, mut turn: Turn, after: &Scan) -> Action {
         let chunk = turn.chunk_rad;
         let measured = || {
-            localiser::measure_rotation(
+            let m = localiser::measure_rotation(
                 &self.geometry,
                 &turn.before,
                 after,
                 chunk,
                 self.params.localiser.rotation_search_deg.to_radians(),
-            )
-            .unwrap_or_else(|| {
+            );
+            if m.is_none() {
                 tracing::debug!(chunk, "rotation not measurable; using the command");
-                chunk
-            })
+            }
+            m
         };
-        let turned = match self.params.localiser.heading_rule {
-            HeadingRule::Commanded => chunk,
-            HeadingRule::ScanMeasured => measured(),
+        let (turned, mut by_laser) = match self.params.localiser.heading_rule {
+            HeadingRule::Commanded => (chunk, false),
+            HeadingRule::ScanMeasured => measured().map_or((chunk, false), |m| (m, true)),
             HeadingRule::ScanMatched => {
                 let m = measured();
-                self.rotation_matched(&turn.before, after, m).unwrap_or(m)
+                let guess = m.unwrap_or(chunk);
+                self.rotation_matched(&turn.before, after, guess)
+                    .map_or((guess, m.is_some()), |r| (r, true))
             }
         };
-        self.estimate = self.estimate.rotated(turned);
+        let rotated = self.estimate.rotated(turned);
+        self.estimate = match self.slam_place(after, rotated) {
+            Some(pose) => {
+                by_laser = true;
+                pose
+            }
+            None => rotated,
+        };
+        let l = &self.params.localiser;
+        let added = if by_laser {
+            l.measured_turn_sigma_deg
+        } else {
+            l.turn_sigma_deg
+        }
+        .to_radians();
+        self.sigma_heading_rad = self.sigma_heading_rad.hypot(added);
         turn.before = after.clone();
         if turn.left > 0 {
             turn.left -= 1;
@@ -721,6 +778,8 @@ impl Navigator {
             let leg = limit.min(self.params.navigator.short_leg_m);
             (LegKind::Short, leg, self.any_landmark(&scan))
         };
+        self.slam_anchor = (origin, 0.0);
+        self.slam_leg_pose = None;
         let drive = Drive::new(self, kind, origin, limit_m, landmark, scan);
         self.drive_step(Box::new(drive))
     }
@@ -739,6 +798,10 @@ impl Navigator {
     /// The scan after a step (step 7): track the landmark, maybe stop at B, maybe a new
     /// keyframe.
     fn drive_scanned(&mut self, mut drive: Box<Drive>, scan: &Scan) -> Action {
+        let since = drive.commanded_m - self.slam_anchor.1;
+        if self.slam.is_some() && since >= self.params.localiser.slam_step_m - 1e-9 {
+            self.slam_drive_scan(scan, drive.commanded_m);
+        }
         if drive.scanned(self, scan) {
             self.drive_step(drive)
         } else {
@@ -751,6 +814,31 @@ impl Navigator {
         let mut drive = *drive;
         let rel = drive.travelled(self);
         self.estimate = drive.origin.compose(&rel);
+        let mut by_laser = drive.laser_measured;
+        if self.slam.is_some() && drive.commanded_m > 0.0 {
+            // The leg's last scan, placed by SLAM unless that was done on its step.
+            let placed = match self.slam_leg_pose {
+                Some((pose, at)) if at == drive.commanded_m => Some(pose),
+                _ => self.slam_drive_scan(&drive.last_scan, drive.commanded_m),
+            };
+            if let Some(pose) = placed {
+                self.estimate = pose;
+                by_laser = true;
+            }
+        }
+        // The error model: the drive's own error, and the heading's error carried along it.
+        let driven = drive
+            .origin
+            .position()
+            .distance_m(&self.estimate.position());
+        let l = &self.params.localiser;
+        let share = if by_laser {
+            l.measured_drive_sigma_share
+        } else {
+            l.drive_sigma_share
+        };
+        self.sigma_position_m =
+            self.sigma_position_m.hypot(share * driven) + driven * self.sigma_heading_rad;
         let judged = (drive.laser_measured, drive.commanded_m);
         let scan = drive.last_scan;
         self.integrate(&scan);
@@ -779,6 +867,81 @@ impl Navigator {
             self.failures = 0;
         }
         self.plan_next(scan)
+    }
+
+    /// Places `scan` by the online SLAM with the search centred on `prediction`; the placed
+    /// pose, or `None` when SLAM is off or could not place the scan.
+    fn slam_place(&mut self, scan: &Scan, prediction: Pose2) -> Option<Pose2> {
+        let front = self.slam.as_mut()?;
+        let placed = front.locate_near(&self.geometry, scan, prediction);
+        let accepted = self.slam_accepts(placed, prediction);
+        // The submap takes the scan where the estimate puts it, so it stays in the estimate's
+        // frame whether or not the placement was taken.
+        if let Some(front) = self.slam.as_mut() {
+            front.insert_at(&self.geometry, scan, accepted.unwrap_or(prediction));
+        }
+        accepted
+    }
+
+    /// The pose of `placed` when it may become the estimate: refined, its data pinning the
+    /// position to `slam_max_sigma_m`.
+    fn slam_accepts(&self, placed: slam::Placement, prediction: Pose2) -> Option<Pose2> {
+        let l = &self.params.localiser;
+        if let slam::Placement::Placed { pose, .. } = placed {
+            // Never farther than the search window and the refinement's largest shift.
+            let shift = pose.position().distance_m(&prediction.position());
+            let turn = scan_types::angle_diff_rad(pose.theta_rad, prediction.theta_rad).abs();
+            if shift > l.slam_window_m * std::f64::consts::SQRT_2 + SLAM_REFINE_SHIFT_M
+                || turn > (l.slam_window_deg + SLAM_REFINE_TURN_DEG).to_radians()
+            {
+                tracing::debug!(shift, turn, "slam placement outside its window; refused");
+                return None;
+            }
+        }
+        match placed {
+            slam::Placement::Placed {
+                pose,
+                quality,
+                sigma_m,
+                ..
+            } if sigma_m.map_or(!self.params.localiser.slam_refined_only, |s| {
+                s <= self.params.localiser.slam_max_sigma_m
+            }) =>
+            {
+                tracing::debug!(
+                    dx = pose.x_m - prediction.x_m,
+                    dy = pose.y_m - prediction.y_m,
+                    dth_deg = scan_types::angle_diff_rad(pose.theta_rad, prediction.theta_rad)
+                        .to_degrees(),
+                    quality,
+                    sigma_m,
+                    "slam placed the scan"
+                );
+                Some(pose)
+            }
+            slam::Placement::Placed { sigma_m, .. } => {
+                tracing::debug!(
+                    sigma_m,
+                    "slam's placement is unrefined or loose; keeping the rules' pose"
+                );
+                None
+            }
+            slam::Placement::Skipped { reason } => {
+                tracing::debug!(%reason, "slam could not place the scan; keeping the rules' pose");
+                None
+            }
+        }
+    }
+
+    /// Places a scan taken while driving, `commanded_m` into the leg: predicted from the
+    /// last placed pose and the travel commanded since.
+    fn slam_drive_scan(&mut self, scan: &Scan, commanded_m: f64) -> Option<Pose2> {
+        let (anchor, at) = self.slam_anchor;
+        let prediction = anchor.compose(&Pose2::new(commanded_m - at, 0.0, 0.0));
+        let placed = self.slam_place(scan, prediction);
+        self.slam_anchor = (placed.unwrap_or(prediction), commanded_m);
+        self.slam_leg_pose = placed.map(|p| (p, commanded_m));
+        placed
     }
 
     /// Counts a leg on which the laser saw less than `stall_share` of the commanded travel;

@@ -24,6 +24,9 @@ pub enum Reason {
     BaseStalled,
     /// The operator stopped the run (Ctrl-C, SIGTERM; reported by the caller).
     Interrupted,
+    /// The estimate reached the target while its position uncertainty exceeded
+    /// `[navigator] arrival_max_sigma_m`: the arrival is flagged, not claimed.
+    UncertainArrival,
     /// The estimate reached the target but the robot is not there: set by an evaluator that
     /// knows the truth (a simulator); the navigator never ends with it.
     FalseArrival,
@@ -41,6 +44,7 @@ impl std::fmt::Display for Reason {
             Reason::BaseStalled => "base_stalled",
             Reason::Interrupted => "interrupted",
             Reason::FalseArrival => "false_arrival",
+            Reason::UncertainArrival => "uncertain_arrival",
         })
     }
 }
@@ -61,6 +65,12 @@ pub struct Leg {
     pub point_b: Option<WorldPoint>,
     /// The hits of the scan taken at the end of the leg, world frame by the estimate.
     pub scan_points: Vec<WorldPoint>,
+    /// The estimate's position uncertainty (one standard deviation, metres) by the
+    /// navigator's own error model: it grows with every turn and drive, less where the laser
+    /// measured them ([`crate::LocaliserParams`]'s `*_sigma_*` keys).
+    pub position_sigma_m: f64,
+    /// The estimate's heading uncertainty (one standard deviation), degrees.
+    pub heading_sigma_deg: f64,
 }
 
 /// How a run ended and what it recorded.

@@ -168,6 +168,150 @@ pub struct LocaliserParams {
     pub turn_match_gate_m: f64,
     /// Occupancy grid cell size, metres.
     pub map_resolution_m: f64,
+    /// A drive's scan match that turns the robot more than this from the drive's heading is
+    /// refused (the base drives straight; such a match paired the wrong points), degrees.
+    #[serde(default = "default_drive_max_turn_deg")]
+    pub drive_max_turn_deg: f64,
+    /// Online SLAM: every turn chunk's scan, every `slam_step_m` of a drive and every leg's
+    /// last scan are placed against a submap of recent keyframes by the slam crate's
+    /// correlative scan-to-submap matching, searched around the pose the rules above give;
+    /// the placed pose becomes the estimate (a scan it cannot place keeps the rules' pose).
+    #[serde(default)]
+    pub slam: bool,
+    /// Half-width of the SLAM search around that pose, metres.
+    #[serde(default = "default_slam_window_m")]
+    pub slam_window_m: f64,
+    /// Half-width of the SLAM search around its heading, degrees.
+    #[serde(default = "default_slam_window_deg")]
+    pub slam_window_deg: f64,
+    /// While driving, a scan is placed by SLAM every this many metres commanded.
+    #[serde(default = "default_slam_step_m")]
+    pub slam_step_m: f64,
+    /// A placed scan becomes a keyframe of the SLAM submap this far from the last one,
+    /// metres (or turned 10 deg from it).
+    #[serde(default = "default_slam_keyframe_m")]
+    pub slam_keyframe_m: f64,
+    /// Keyframes in the SLAM submap (the oldest leaves when it is full).
+    #[serde(default = "default_slam_keyframes")]
+    pub slam_keyframes: usize,
+    /// Fewest hits (one per 5 cm cell) for SLAM to place a scan.
+    #[serde(default = "default_slam_min_points")]
+    pub slam_min_points: usize,
+    /// Least correlative score (0..1) of a SLAM placement.
+    #[serde(default = "default_slam_min_quality")]
+    pub slam_min_quality: f64,
+    /// Heading uncertainty a turn chunk adds when no scan measured it (the commands alone),
+    /// degrees (one standard deviation).
+    #[serde(default = "default_turn_sigma_deg")]
+    pub turn_sigma_deg: f64,
+    /// ... and when a scan measured it, degrees.
+    #[serde(default = "default_measured_turn_sigma_deg")]
+    pub measured_turn_sigma_deg: f64,
+    /// Position uncertainty a drive adds per metre when no scan measured it (a share of the
+    /// distance; a heading uncertainty adds its own lateral error on top).
+    #[serde(default = "default_drive_sigma_share")]
+    pub drive_sigma_share: f64,
+    /// ... and when a scan measured it.
+    #[serde(default = "default_measured_drive_sigma_share")]
+    pub measured_drive_sigma_share: f64,
+    /// Gaussian fall-off of the SLAM submap's likelihood field around each point, metres.
+    #[serde(default = "default_slam_smoothing_m")]
+    pub slam_smoothing_m: f64,
+    /// Cell of the SLAM submap's likelihood field, metres.
+    #[serde(default = "default_slam_resolution_m")]
+    pub slam_resolution_m: f64,
+    /// Only a placement that ICP refined becomes the estimate (the correlative pose alone is
+    /// good to about a cell and an angular step).
+    #[serde(default = "default_true")]
+    pub slam_refined_only: bool,
+    /// A refined placement becomes the estimate only when its data pin the position this
+    /// well in the worst direction, metres (one standard deviation; a lone wall or post
+    /// lets the scan slide).
+    #[serde(default = "default_slam_max_sigma_m")]
+    pub slam_max_sigma_m: f64,
+}
+
+fn default_slam_max_sigma_m() -> f64 {
+    0.01
+}
+
+fn default_turn_sigma_deg() -> f64 {
+    1.0
+}
+
+fn default_measured_turn_sigma_deg() -> f64 {
+    0.2
+}
+
+fn default_drive_sigma_share() -> f64 {
+    0.02
+}
+
+fn default_measured_drive_sigma_share() -> f64 {
+    0.005
+}
+
+fn default_slam_smoothing_m() -> f64 {
+    0.2
+}
+
+fn default_slam_resolution_m() -> f64 {
+    0.05
+}
+
+fn default_true() -> bool {
+    true
+}
+
+fn default_slam_min_points() -> usize {
+    20
+}
+
+fn default_slam_min_quality() -> f64 {
+    0.45
+}
+
+fn default_slam_keyframe_m() -> f64 {
+    0.5
+}
+
+fn default_slam_keyframes() -> usize {
+    60
+}
+
+fn default_drive_max_turn_deg() -> f64 {
+    1.0
+}
+
+fn default_slam_window_m() -> f64 {
+    0.3
+}
+
+fn default_slam_window_deg() -> f64 {
+    8.0
+}
+
+fn default_slam_step_m() -> f64 {
+    0.25
+}
+
+impl LocaliserParams {
+    /// The slam front end's parameters for the online option: the library's defaults with
+    /// the search window narrowed to `slam_window_m` / `slam_window_deg` (the rules' pose is
+    /// a far better prediction than the offline constant-velocity model).
+    pub fn slam_front_end(&self) -> slam::FrontEndParams {
+        slam::FrontEndParams {
+            linear_window_m: self.slam_window_m,
+            angular_window_deg: self.slam_window_deg,
+            keyframe_distance_m: self.slam_keyframe_m,
+            submap_keyframes: self.slam_keyframes,
+            min_points: self.slam_min_points,
+            min_quality: self.slam_min_quality,
+            resolution_m: self.slam_resolution_m,
+            smoothing_m: self.slam_smoothing_m,
+            ..slam::FrontEndParams::default()
+        }
+    }
 }
 
 /// The loop itself.
@@ -209,6 +353,17 @@ pub struct LoopParams {
     pub stall_share: f64,
     /// Stalled legs in a row that end the run as base_stalled.
     pub stall_legs: usize,
+    /// An arrival whose position uncertainty (the legs' `position_sigma_m`) exceeds
+    /// `arrival_max_sigma_m` ends the run as uncertain_arrival instead of reached.
+    #[serde(default)]
+    pub flag_uncertain_arrival: bool,
+    /// The largest position uncertainty of a claimed arrival, metres.
+    #[serde(default = "default_arrival_max_sigma_m")]
+    pub arrival_max_sigma_m: f64,
+}
+
+fn default_arrival_max_sigma_m() -> f64 {
+    0.3
 }
 
 fn default_min_legs() -> usize {
@@ -284,6 +439,23 @@ impl Params {
                 turn_match_prior_m: 0.01,
                 turn_match_gate_m: 0.15,
                 map_resolution_m: 0.05,
+                drive_max_turn_deg: default_drive_max_turn_deg(),
+                slam: false,
+                slam_window_m: default_slam_window_m(),
+                slam_window_deg: default_slam_window_deg(),
+                slam_step_m: default_slam_step_m(),
+                slam_keyframe_m: default_slam_keyframe_m(),
+                slam_keyframes: default_slam_keyframes(),
+                slam_min_points: default_slam_min_points(),
+                slam_min_quality: default_slam_min_quality(),
+                slam_resolution_m: default_slam_resolution_m(),
+                slam_refined_only: true,
+                slam_max_sigma_m: default_slam_max_sigma_m(),
+                slam_smoothing_m: default_slam_smoothing_m(),
+                turn_sigma_deg: default_turn_sigma_deg(),
+                measured_turn_sigma_deg: default_measured_turn_sigma_deg(),
+                drive_sigma_share: default_drive_sigma_share(),
+                measured_drive_sigma_share: default_measured_drive_sigma_share(),
             },
             navigator: LoopParams {
                 max_legs: 400,
@@ -300,6 +472,8 @@ impl Params {
                 short_leg_m: 1.0,
                 stall_share: 0.25,
                 stall_legs: 2,
+                flag_uncertain_arrival: false,
+                arrival_max_sigma_m: default_arrival_max_sigma_m(),
             },
         }
     }
@@ -397,6 +571,21 @@ impl Params {
             ("localiser.turn_match_prior_m", z.turn_match_prior_m, 0.0, 10.0, true),
             ("localiser.turn_match_gate_m", z.turn_match_gate_m, 0.0, 5.0, true),
             ("localiser.map_resolution_m", z.map_resolution_m, 0.01, 1.0, false),
+            ("localiser.drive_max_turn_deg", z.drive_max_turn_deg, 0.0, 180.0, true),
+            ("localiser.slam_window_m", z.slam_window_m, 0.0, 1.6, true),
+            ("localiser.slam_window_deg", z.slam_window_deg, 0.0, 90.0, true),
+            ("localiser.slam_step_m", z.slam_step_m, 0.0, 10.0, true),
+            ("localiser.slam_keyframe_m", z.slam_keyframe_m, 0.0, 10.0, true),
+            ("localiser.slam_keyframes", count(z.slam_keyframes), 1.0, 10000.0, false),
+            ("localiser.slam_min_points", count(z.slam_min_points), 3.0, 10000.0, false),
+            ("localiser.slam_min_quality", z.slam_min_quality, 0.0, 1.0, false),
+            ("localiser.slam_resolution_m", z.slam_resolution_m, 0.01, 1.0, false),
+            ("localiser.slam_max_sigma_m", z.slam_max_sigma_m, 0.0, 10.0, true),
+            ("localiser.slam_smoothing_m", z.slam_smoothing_m, 0.0, 1.0, true),
+            ("localiser.turn_sigma_deg", z.turn_sigma_deg, 0.0, 90.0, false),
+            ("localiser.measured_turn_sigma_deg", z.measured_turn_sigma_deg, 0.0, 90.0, false),
+            ("localiser.drive_sigma_share", z.drive_sigma_share, 0.0, 1.0, false),
+            ("localiser.measured_drive_sigma_share", z.measured_drive_sigma_share, 0.0, 1.0, false),
             ("navigator.max_legs", count(n.max_legs), 1.0, 1e6, false),
             ("navigator.min_legs", count(n.min_legs), 1.0, 1e6, false),
             ("navigator.legs_per_m", n.legs_per_m, 0.0, 1000.0, false),
@@ -411,6 +600,7 @@ impl Params {
             ("navigator.short_leg_m", n.short_leg_m, 0.0, 100.0, true),
             ("navigator.stall_share", n.stall_share, 0.0, 1.0, false),
             ("navigator.stall_legs", count(n.stall_legs), 1.0, 1000.0, false),
+            ("navigator.arrival_max_sigma_m", n.arrival_max_sigma_m, 0.0, 100.0, true),
         ];
         table
     }

@@ -60,6 +60,11 @@ pub struct Summary {
     /// The narrow passages the run drove through (graded clearance), in leg order.
     #[serde(default)]
     pub narrow_passages: Vec<NarrowPassage>,
+    /// The navigator's position uncertainty at the end of every leg (leg 0 = the start),
+    /// metres: its own error model, no truth needed.
+    pub position_sigma_m: Vec<f64>,
+    /// The navigator's heading uncertainty at the end of every leg, degrees.
+    pub heading_sigma_deg: Vec<f64>,
 }
 
 /// A passage narrower than the full margin allows, taken on one leg.
@@ -87,6 +92,15 @@ pub fn narrow_passages(outcome: &navigator::Outcome) -> Vec<NarrowPassage> {
             width_m: n.width_m,
         })
         .collect()
+}
+
+/// The navigator's position and heading uncertainty at each leg end of `outcome`.
+pub fn leg_sigmas(outcome: &navigator::Outcome) -> (Vec<f64>, Vec<f64>) {
+    outcome
+        .legs
+        .iter()
+        .map(|l| (l.position_sigma_m, l.heading_sigma_deg))
+        .unzip()
 }
 
 /// One run's term of Success weighted by Path Length (Anderson et al. 2018):

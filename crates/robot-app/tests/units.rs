@@ -110,6 +110,8 @@ mod outputs {
             final_truth: None,
             note: "laser timed out".into(),
             narrow_passages: Vec::new(),
+            position_sigma_m: vec![0.0],
+            heading_sigma_deg: vec![0.0],
         };
         write_summary(dir.path(), &s).unwrap();
         let text = std::fs::read_to_string(dir.path().join("summary.json")).unwrap();
@@ -384,6 +386,7 @@ mod batch_table {
             geodesic_m: None,
             spl: None,
             cpu_time_s: 0.1,
+            final_position_sigma_m: None,
             note: String::new(),
         }
     }

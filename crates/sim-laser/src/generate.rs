@@ -1,4 +1,5 @@
-//! Seeded random worlds: a corridor with rooms on both sides, doors, and clutter.
+//! Seeded random worlds: a corridor with rooms on both sides, doors, and clutter; or, with no
+//! rooms (`rooms_per_side = 0`), an open walled area with sparse clutter only.
 
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -12,7 +13,8 @@ pub struct GenParams {
     pub width_m: f64,
     /// World height, metres.
     pub height_m: f64,
-    /// Rooms on each side of the corridor.
+    /// Rooms on each side of the corridor; 0 makes a clutter-only world: the outer walls and
+    /// sparse clutter in the open, no corridor, rooms or doors.
     pub rooms_per_side: usize,
     /// Corridor width, metres.
     pub corridor_width_m: f64,
@@ -66,8 +68,25 @@ impl GenParams {
                 return bad(f, format!("{v} must be finite and > 0"));
             }
         }
+        let [a, b] = self.clutter_size_m;
+        if !(a.is_finite() && b.is_finite() && a > 0.0 && b >= a) {
+            return bad(
+                "clutter_size_m",
+                format!("[{a}, {b}] must be 0 < min <= max"),
+            );
+        }
         if self.rooms_per_side == 0 {
-            return bad("rooms_per_side", "must be at least 1".into());
+            // Start and target sit CLUTTER_END_M from the side walls, apart by at least 1 m.
+            if self.width_m < 2.0 * CLUTTER_END_M + 1.0 || self.height_m < 2.0 {
+                return bad(
+                    "width_m",
+                    format!(
+                        "a clutter-only world needs at least {} m x 2 m",
+                        2.0 * CLUTTER_END_M + 1.0
+                    ),
+                );
+            }
+            return Ok(());
         }
         let room_w = self.width_m / self.rooms_per_side as f64;
         if room_w < self.door_width_m + 4.0 * self.wall_thickness_m + 0.4 {
@@ -81,13 +100,6 @@ impl GenParams {
             return bad(
                 "height_m",
                 format!("rooms {room_h:.2} m deep are too shallow"),
-            );
-        }
-        let [a, b] = self.clutter_size_m;
-        if !(a.is_finite() && b.is_finite() && a > 0.0 && b >= a) {
-            return bad(
-                "clutter_size_m",
-                format!("[{a}, {b}] must be 0 < min <= max"),
             );
         }
         if !(0.0..=1.0).contains(&self.side_door_prob) {
@@ -164,6 +176,9 @@ pub fn generate_world(seed: u64, p: &GenParams) -> Result<WorldDescription, SimE
     let (hw, hh) = (p.width_m / 2.0, p.height_m / 2.0);
     let mut obs = Vec::new();
     outer_walls(&mut obs, p);
+    if p.rooms_per_side == 0 {
+        return Ok(clutter_only(&mut rng, seed, p, obs));
+    }
     let xs = room_splits(&mut rng, p);
     let (rooms, doors) = rooms_and_doors(&mut rng, p, &xs, &mut obs);
     let centre_of = |r: &Room| [(r.0 + r.1) / 2.0, (r.2 + r.3) / 2.0];
@@ -182,6 +197,35 @@ pub fn generate_world(seed: u64, p: &GenParams) -> Result<WorldDescription, SimE
         start: Some([start_xy[0], start_xy[1], start_theta]),
         target: Some(target),
     })
+}
+
+/// Distance of a clutter-only world's start and target from the left and right walls, metres.
+pub const CLUTTER_END_M: f64 = 1.5;
+
+/// A clutter-only world: the outer walls, a start `CLUTTER_END_M` from the left wall and a
+/// target as far from the right wall (each at a random height in the middle half), and the
+/// clutter anywhere in the open, clear of the walls, start and target and of each other.
+fn clutter_only(
+    rng: &mut ChaCha8Rng,
+    seed: u64,
+    p: &GenParams,
+    mut obs: Vec<Obstacle>,
+) -> WorldDescription {
+    let (hw, hh, t) = (p.width_m / 2.0, p.height_m / 2.0, p.wall_thickness_m);
+    let y_span = (hh / 2.0).max(1e-3);
+    let start_xy = [-hw + CLUTTER_END_M, rng.random_range(-y_span..y_span)];
+    let target = [hw - CLUTTER_END_M, rng.random_range(-y_span..y_span)];
+    let start_theta = rng.random_range(-std::f64::consts::PI..std::f64::consts::PI);
+    let open: Room = (-hw + t, hw - t, -hh + t, hh - t);
+    place_clutter(rng, p, &[open], &[start_xy, target], &mut obs);
+    WorldDescription {
+        name: format!("clutter-{seed}"),
+        bounds: Some(([-hw, -hh], [hw, hh])),
+        boundary: false,
+        obstacles: obs,
+        start: Some([start_xy[0], start_xy[1], start_theta]),
+        target: Some(target),
+    }
 }
 
 /// A room's interior: x0, x1, y0, y1.

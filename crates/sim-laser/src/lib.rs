@@ -33,12 +33,12 @@ mod world;
 
 pub use description::{WorldDescription, read_description};
 pub use error::SimError;
-pub use generate::{GenParams, generate_world};
+pub use generate::{CLUTTER_END_M, GenParams, generate_world};
 pub use geodesic::{GEODESIC_CELL_M, GEODESIC_MAX_CELLS, GEODESIC_SNAP_M, GeodesicMap, geodesic_m};
 pub use mapserver::{MapMode, MapServerYaml, UnknownCells, parse_map_yaml};
 pub use sampling::{
-    FreeSpace, PAIR_CELL_M, PairSampler, WorldKind, corridor_world_params, generated_world,
-    pair_salt, random_world_params,
+    FreeSpace, PAIR_CELL_M, PairSampler, WorldKind, clutter_world_params, corridor_world_params,
+    generated_world, pair_salt, random_world_params,
 };
 pub use scenario::{SimSetup, file_scenario, paper_start, paper_target};
 pub use sensor::{

@@ -18,6 +18,8 @@ pub enum WorldKind {
     Random,
     /// A generated wide-corridor world ([`corridor_world_params`]).
     Corridor,
+    /// A generated clutter-only open world ([`clutter_world_params`]).
+    Clutter,
     /// A world loaded from a file.
     File,
 }
@@ -29,6 +31,7 @@ impl std::fmt::Display for WorldKind {
             Self::Paper => "paper",
             Self::Random => "random",
             Self::Corridor => "corridor",
+            Self::Clutter => "clutter",
             Self::File => "file",
         })
     }
@@ -53,11 +56,27 @@ pub fn corridor_world_params() -> GenParams {
     }
 }
 
-/// A generated world of `kind` (`Random` or `Corridor`) from seed `k`, with its own start and
-/// target.
+/// Generator parameters of the clutter-only worlds: a 20 m x 12 m walled open area with 5
+/// boxes and 5 discs (0.2 to 0.6 m) and nothing else, so that for much of the way from a start
+/// 1.5 m from the left wall to a target 1.5 m from the right wall few surfaces lie within the
+/// laser's 4 m.
+pub fn clutter_world_params() -> GenParams {
+    GenParams {
+        width_m: 20.0,
+        height_m: 12.0,
+        rooms_per_side: 0,
+        boxes: 5,
+        circles: 5,
+        ..GenParams::default()
+    }
+}
+
+/// A generated world of `kind` (`Random`, `Corridor` or `Clutter`) from seed `k`, with its own
+/// start and target.
 pub fn generated_world(kind: WorldKind, k: u64) -> Result<(World, Pose2, WorldPoint), SimError> {
     let params = match kind {
         WorldKind::Corridor => corridor_world_params(),
+        WorldKind::Clutter => clutter_world_params(),
         _ => random_world_params(),
     };
     let d = generate_world(k, &params)?;
@@ -252,12 +271,12 @@ pub const PAIR_CELL_M: f64 = 0.1;
 /// generated worlds get pairs of their own for the same seed.
 pub fn pair_salt(kind: WorldKind, k: u64) -> u64 {
     match kind {
-        WorldKind::Random | WorldKind::Corridor => {
+        WorldKind::Random | WorldKind::Corridor | WorldKind::Clutter => {
             (k + 1) << 32
-                | if kind == WorldKind::Corridor {
-                    1 << 31
-                } else {
-                    0
+                | match kind {
+                    WorldKind::Corridor => 1 << 31,
+                    WorldKind::Clutter => 1 << 30,
+                    _ => 0,
                 }
         }
         WorldKind::Paper | WorldKind::File => 0,

@@ -367,3 +367,75 @@ fn generated_worlds_are_seeded_and_round_trip() {
         .is_err()
     );
 }
+
+/// A clutter-only world (`rooms_per_side = 0`): the four outer walls and the asked-for clutter,
+/// nothing else; start and target 1.5 m from the left and right walls at mid heights; the
+/// clutter clear of both and of the walls.
+#[test]
+fn clutter_only_worlds_are_open_and_sparse() {
+    let g = sim_laser::clutter_world_params();
+    assert_eq!(
+        (g.width_m, g.height_m, g.rooms_per_side, g.boxes, g.circles),
+        (20.0, 12.0, 0, 5, 5)
+    );
+    for seed in 0..20 {
+        let d = generate_world(seed, &g).unwrap();
+        assert_eq!(d, generate_world(seed, &g).unwrap());
+        let s = d.start.unwrap();
+        let t = d.target.unwrap();
+        // 1.5 m from the side walls at x = -10 and 10, within the middle half of y (|y| <= 3).
+        assert!((s[0] + 8.5).abs() < 1e-12 && s[1].abs() <= 3.0, "{s:?}");
+        assert!((t[0] - 8.5).abs() < 1e-12 && t[1].abs() <= 3.0, "{t:?}");
+        // Four unbroken outer walls (20 x 0.1 and 0.1 x 11.8) plus at most 5 boxes and 5 discs.
+        let walls = d
+            .obstacles
+            .iter()
+            .filter(
+                |o| matches!(o, Obstacle::Box { size, .. } if size[0] >= 11.0 || size[1] >= 11.0),
+            )
+            .count();
+        assert_eq!(walls, 4, "seed {seed}");
+        let clutter: Vec<&Obstacle> = d
+            .obstacles
+            .iter()
+            .filter(
+                |o| !matches!(o, Obstacle::Box { size, .. } if size[0] >= 11.0 || size[1] >= 11.0),
+            )
+            .collect();
+        let boxes = clutter
+            .iter()
+            .filter(|o| matches!(o, Obstacle::Box { .. }))
+            .count();
+        assert!(boxes <= 5 && clutter.len() - boxes <= 5, "seed {seed}");
+        // Rejection sampling with 200 tries each places nearly all of them in 236 m^2.
+        assert!(clutter.len() >= 8, "seed {seed}: {}", clutter.len());
+        // Sparse: every item fits in a 0.6 m x 0.6 m square, so at most 10 x 0.36 = 3.6 m^2
+        // (1.5 %) of the 20 x 12 area is clutter.
+        for o in &clutter {
+            match o {
+                Obstacle::Box { size, .. } => assert!(size[0] <= 0.6 && size[1] <= 0.6),
+                Obstacle::Circle { radius, .. } => assert!(*radius <= 0.3),
+                _ => panic!("unexpected {o:?}"),
+            }
+        }
+        // The clutter keeps 0.7 m + half a door (0.5 m) from start and target, and 0.7 m from
+        // the walls: a 1.1 m disc around each is free, and so is everything within 0.7 m of the
+        // inner faces of the walls (|x| > 9.2 or |y| > 5.2 holds no clutter).
+        let w = d.to_world().unwrap();
+        assert!(!w.disc_collides(p(s[0], s[1]), 1.1), "seed {seed}");
+        assert!(!w.disc_collides(p(t[0], t[1]), 1.1), "seed {seed}");
+        for o in &clutter {
+            let (c, r) = match o {
+                Obstacle::Box { centre, size, .. } => (*centre, 0.5 * size[0].hypot(size[1])),
+                Obstacle::Circle { centre, radius } => (*centre, *radius),
+                _ => unreachable!(),
+            };
+            assert!(
+                c[0].abs() + r <= 9.2 + 1e-9 && c[1].abs() + r <= 5.2 + 1e-9,
+                "{o:?}"
+            );
+        }
+    }
+    // Too narrow for a start and a target 1.5 m from the walls and 1 m apart.
+    assert!(generate_world(1, &GenParams { width_m: 3.5, ..g }).is_err());
+}

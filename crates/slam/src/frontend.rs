@@ -179,6 +179,10 @@ pub enum Placement {
         quality: f64,
         /// True when ICP refined the pose (false: the correlative pose, good to about a cell).
         refined: bool,
+        /// How well the refinement's data alone pin the position in its worst direction
+        /// (one standard deviation, metres; `None` when not refined): large along a lone
+        /// wall or around a lone post, where the scan can slide.
+        sigma_m: Option<f64>,
         /// True when the scan became a keyframe of the submap.
         keyframe: bool,
         /// True when the wide search placed it (false: ICP from the prediction).
@@ -270,8 +274,56 @@ impl FrontEnd {
         &self.match_params
     }
 
-    /// Places the next scan (of `geometry`).
+    /// Places the next scan (of `geometry`), predicted by the constant-velocity model.
     pub fn add_scan(&mut self, geometry: &ScanGeometry, scan: &Scan) -> Placement {
+        self.add_scan_from(geometry, scan, None, true)
+    }
+
+    /// Places the next scan (of `geometry`) with the search centred on `prediction` (a pose
+    /// from a motion model, e.g. the commands a robot gave since its last scan) instead of
+    /// the constant-velocity model. The first scan is placed at `prediction` itself, so that
+    /// the poses are in the caller's frame.
+    pub fn add_scan_near(
+        &mut self,
+        geometry: &ScanGeometry,
+        scan: &Scan,
+        prediction: Pose2,
+    ) -> Placement {
+        self.add_scan_from(geometry, scan, Some(prediction), true)
+    }
+
+    /// Where the scan would be placed with the search centred on `prediction`, without
+    /// adding it: the caller decides the pose and adds the scan with [`FrontEnd::insert_at`]
+    /// (an online user that refuses a placement keeps the submap in its own frame). Before
+    /// the first insertion there is nothing to match: the answer is `prediction`, unrefined.
+    pub fn locate_near(
+        &mut self,
+        geometry: &ScanGeometry,
+        scan: &Scan,
+        prediction: Pose2,
+    ) -> Placement {
+        self.add_scan_from(geometry, scan, Some(prediction), false)
+    }
+
+    /// Adds the scan at `pose` without matching it (a keyframe when it is the first, or far
+    /// enough from the last keyframe); true when it became a keyframe.
+    pub fn insert_at(&mut self, geometry: &ScanGeometry, scan: &Scan, pose: Pose2) -> bool {
+        let points = thin_hits(geometry, scan, &self.params);
+        if points.len() < self.params.min_points {
+            return false;
+        }
+        let keyframe = self.grid.is_none() || self.is_keyframe(&pose);
+        self.place(pose, geometry, scan, &points, keyframe);
+        keyframe
+    }
+
+    fn add_scan_from(
+        &mut self,
+        geometry: &ScanGeometry,
+        scan: &Scan,
+        prediction: Option<Pose2>,
+        commit: bool,
+    ) -> Placement {
         let points = thin_hits(geometry, scan, &self.params);
         if points.len() < self.params.min_points {
             return Placement::Skipped {
@@ -279,12 +331,15 @@ impl FrontEnd {
             };
         }
         let (Some(last), true) = (self.last, self.grid.is_some()) else {
-            let pose = Pose2::default();
-            self.place(pose, geometry, scan, &points, true);
+            let pose = prediction.unwrap_or_default();
+            if commit {
+                self.place(pose, geometry, scan, &points, true);
+            }
             return Placement::Placed {
                 pose,
                 quality: 1.0,
                 refined: false,
+                sigma_m: None,
                 keyframe: true,
                 wide: false,
             };
@@ -293,14 +348,17 @@ impl FrontEnd {
         let step = self
             .before_last
             .map_or(Pose2::default(), |b| b.inverse().compose(&last));
-        let guess = last.compose(&step);
-        if let Some((pose, quality)) = self.local(geometry, scan, &points, guess) {
+        let guess = prediction.unwrap_or_else(|| last.compose(&step));
+        if let Some((pose, quality, sigma)) = self.local(geometry, scan, &points, guess) {
             let keyframe = self.is_keyframe(&pose);
-            self.place(pose, geometry, scan, &points, keyframe);
+            if commit {
+                self.place(pose, geometry, scan, &points, keyframe);
+            }
             return Placement::Placed {
                 pose,
                 quality,
                 refined: true,
+                sigma_m: Some(sigma),
                 keyframe,
                 wide: false,
             };
@@ -310,7 +368,7 @@ impl FrontEnd {
             step.y_m,
             step.theta_rad * self.params.rotation_prediction,
         );
-        let centre = last.compose(&damped);
+        let centre = prediction.unwrap_or_else(|| last.compose(&damped));
         let window = Window {
             linear_m: self.params.linear_window_m,
             angular_rad: self.params.angular_window_deg.to_radians(),
@@ -326,13 +384,22 @@ impl FrontEnd {
                 reason: SkipReason::NoMatch,
             };
         };
-        let (pose, refined) = self.refine(geometry, scan, &points, found);
+        tracing::trace!(
+            dx = found.pose.x_m - centre.x_m,
+            dy = found.pose.y_m - centre.y_m,
+            quality = found.quality,
+            "correlative placement"
+        );
+        let (pose, sigma_m) = self.refine(geometry, scan, &points, found);
         let keyframe = self.is_keyframe(&pose);
-        self.place(pose, geometry, scan, &points, keyframe);
+        if commit {
+            self.place(pose, geometry, scan, &points, keyframe);
+        }
         Placement::Placed {
             pose,
             quality: found.quality,
-            refined,
+            refined: sigma_m.is_some(),
+            sigma_m,
             keyframe,
             wide: true,
         }
@@ -345,7 +412,7 @@ impl FrontEnd {
         scan: &Scan,
         points: &[[f64; 2]],
         guess: Pose2,
-    ) -> Option<(Pose2, f64)> {
+    ) -> Option<(Pose2, f64, f64)> {
         if !self.params.refine || self.params.local_quality >= 1.0 {
             return None;
         }
@@ -364,21 +431,21 @@ impl FrontEnd {
         }
         let quality = crate::correlative::quality(self.grid.as_ref()?, points, &m.pose);
         tracing::trace!(quality, "local match");
-        (quality >= self.params.local_quality).then_some((m.pose, quality))
+        (quality >= self.params.local_quality).then_some((m.pose, quality, m.data_worst_sigma_m))
     }
 
-    /// The correlative pose refined by ICP, and whether it was: a refinement that moves too
-    /// far or lowers the field score is refused.
+    /// The correlative pose refined by ICP, and the refinement's worst-direction sigma when
+    /// it was (`None`: a refinement that moves too far or lowers the field score is refused).
     fn refine(
         &mut self,
         geometry: &ScanGeometry,
         scan: &Scan,
         points: &[[f64; 2]],
         found: crate::correlative::Found,
-    ) -> (Pose2, bool) {
+    ) -> (Pose2, Option<f64>) {
         let coarse = found.pose;
         if !self.params.refine {
-            return (coarse, false);
+            return (coarse, None);
         }
         let shift = self.params.max_refine_shift_m;
         let Some(m) = self
@@ -386,7 +453,7 @@ impl FrontEnd {
             .align(geometry, scan, coarse, &self.match_params)
             .filter(|m| m.pose.position().distance_m(&coarse.position()) <= shift)
         else {
-            return (coarse, false);
+            return (coarse, None);
         };
         let grid = self
             .grid
@@ -394,9 +461,9 @@ impl FrontEnd {
             .expect("a submap exists once a scan is placed");
         let refined_quality = crate::correlative::quality(grid, points, &m.pose);
         if refined_quality < found.quality - self.params.max_refine_loss {
-            return (coarse, false);
+            return (coarse, None);
         }
-        (m.pose, true)
+        (m.pose, Some(m.data_worst_sigma_m))
     }
 
     fn is_keyframe(&self, pose: &Pose2) -> bool {

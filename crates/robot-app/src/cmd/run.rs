@@ -150,6 +150,7 @@ fn summary_of(
     cpu_time_s: f64,
 ) -> Summary {
     let deg = |p: &Pose2| [p.x_m, p.y_m, p.theta_rad.to_degrees()];
+    let (position_sigma_m, heading_sigma_deg) = crate::outputs::leg_sigmas(outcome);
     Summary {
         reached: outcome.reason == Reason::Reached,
         reason: outcome.reason,
@@ -173,5 +174,7 @@ fn summary_of(
         final_truth: None,
         note: outcome.note.clone(),
         narrow_passages: crate::outputs::narrow_passages(outcome),
+        position_sigma_m,
+        heading_sigma_deg,
     }
 }

@@ -213,6 +213,7 @@ fn simulate_inner(
             "the estimate reached the target but the robot is {goal_distance:.2} m from it"
         );
     }
+    let (position_sigma_m, heading_sigma_deg) = crate::outputs::leg_sigmas(outcome);
     let summary = Summary {
         reached,
         reason,
@@ -236,6 +237,8 @@ fn simulate_inner(
         final_truth: Some(pose_deg(&t)),
         note,
         narrow_passages: crate::outputs::narrow_passages(outcome),
+        position_sigma_m,
+        heading_sigma_deg,
     };
     Ok(SimRun {
         summary,

@@ -16,7 +16,8 @@ pub struct WorldArgs {
 
 #[derive(Debug, Subcommand)]
 enum WorldCommand {
-    /// Generate a seeded random world (rooms, doors, a corridor, clutter) and write it.
+    /// Generate a seeded random world (rooms, doors, a corridor, clutter; or, with
+    /// --clutter-only, an open area with sparse clutter) and write it.
     Generate(GenerateArgs),
     /// Load a world file and print its size, obstacles and the scenario it stores.
     Info(InfoArgs),
@@ -35,27 +36,33 @@ struct GenerateArgs {
     /// Number of consecutive seeds to generate (needs {seed} in --out when > 1).
     #[arg(long, default_value_t = 1)]
     count: u64,
-    /// World width, metres.
-    #[arg(long, default_value_t = GenParams::default().width_m)]
-    width: f64,
-    /// World height, metres.
-    #[arg(long, default_value_t = GenParams::default().height_m)]
-    height: f64,
-    /// Rooms on each side of the corridor.
-    #[arg(long, default_value_t = GenParams::default().rooms_per_side)]
-    rooms: usize,
+    /// Clutter-only: an open walled area with sparse boxes and discs, no rooms, corridor or
+    /// doors (the batch's `--clutter-worlds`: 20 m x 12 m, 5 boxes, 5 discs, unless the options
+    /// below say otherwise). Same as `--rooms 0` with those defaults.
+    #[arg(long)]
+    clutter_only: bool,
+    /// World width, metres [default: 16, or 20 with --clutter-only].
+    #[arg(long)]
+    width: Option<f64>,
+    /// World height, metres [default: 10, or 12 with --clutter-only].
+    #[arg(long)]
+    height: Option<f64>,
+    /// Rooms on each side of the corridor; 0 gives a clutter-only world [default: 3, or 0
+    /// with --clutter-only].
+    #[arg(long)]
+    rooms: Option<usize>,
     /// Corridor width, metres.
     #[arg(long, default_value_t = GenParams::default().corridor_width_m)]
     corridor: f64,
     /// Door width, metres.
     #[arg(long, default_value_t = GenParams::default().door_width_m)]
     door: f64,
-    /// Clutter boxes.
-    #[arg(long, default_value_t = GenParams::default().boxes)]
-    boxes: usize,
-    /// Round clutter obstacles.
-    #[arg(long, default_value_t = GenParams::default().circles)]
-    circles: usize,
+    /// Clutter boxes [default: 8, or 5 with --clutter-only].
+    #[arg(long)]
+    boxes: Option<usize>,
+    /// Round clutter obstacles [default: 6, or 5 with --clutter-only].
+    #[arg(long)]
+    circles: Option<usize>,
     /// Pixel size of .yaml/.png outputs, metres.
     #[arg(long, default_value_t = 0.02)]
     resolution: f64,
@@ -77,16 +84,27 @@ pub fn run(args: WorldArgs) -> anyhow::Result<()> {
 }
 
 fn generate(a: GenerateArgs) -> anyhow::Result<()> {
+    let base = if a.clutter_only || a.rooms == Some(0) {
+        sim_laser::clutter_world_params()
+    } else {
+        GenParams::default()
+    };
     let params = GenParams {
-        width_m: a.width,
-        height_m: a.height,
-        rooms_per_side: a.rooms,
+        width_m: a.width.unwrap_or(base.width_m),
+        height_m: a.height.unwrap_or(base.height_m),
+        rooms_per_side: a.rooms.unwrap_or(base.rooms_per_side),
         corridor_width_m: a.corridor,
         door_width_m: a.door,
-        boxes: a.boxes,
-        circles: a.circles,
-        ..GenParams::default()
+        boxes: a.boxes.unwrap_or(base.boxes),
+        circles: a.circles.unwrap_or(base.circles),
+        ..base
     };
+    if a.clutter_only && params.rooms_per_side != 0 {
+        bail!(
+            "--clutter-only makes a world without rooms: drop --rooms {}",
+            params.rooms_per_side
+        );
+    }
     let template = a.out.to_string_lossy().into_owned();
     if a.count > 1 && !template.contains("{seed}") {
         bail!("--count {} needs {{seed}} in --out ({template})", a.count);

@@ -91,7 +91,11 @@ pub fn build(args: &BatchArgs) -> anyhow::Result<Vec<Job>> {
 /// The worlds named by `--worlds` (default: the paper's), then the generated ones.
 fn worlds(args: &BatchArgs, configs: &[Params]) -> anyhow::Result<Vec<WorldEntry>> {
     let mut worlds: Vec<WorldEntry> = Vec::new();
-    let names = if args.worlds.is_empty() && args.random_worlds == 0 && args.corridor_worlds == 0 {
+    let names = if args.worlds.is_empty()
+        && args.random_worlds == 0
+        && args.corridor_worlds == 0
+        && args.clutter_worlds == 0
+    {
         vec!["paper".to_string()]
     } else {
         args.worlds.clone()
@@ -136,6 +140,7 @@ fn worlds(args: &BatchArgs, configs: &[Params]) -> anyhow::Result<Vec<WorldEntry
     for (kind, count) in [
         (WorldKind::Random, args.random_worlds),
         (WorldKind::Corridor, args.corridor_worlds),
+        (WorldKind::Clutter, args.clutter_worlds),
     ] {
         for k in 0..count as u64 {
             let (world, start, target) =

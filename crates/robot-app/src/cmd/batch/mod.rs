@@ -38,6 +38,12 @@ pub struct BatchArgs {
     /// rooms; pairs lie in the corridor), reported apart as `corridor`.
     #[arg(long, default_value_t = 0, value_name = "K")]
     pub corridor_worlds: usize,
+    /// Also run in K seeded clutter-only worlds (a 20 m x 12 m open walled area with 5 boxes
+    /// and 5 discs, start and target 17 m apart; `world generate --clutter-only`), reported
+    /// apart as `clutter`. `--clutter-worlds 50 --seeds 0..1 --scenarios paper` is one run in
+    /// each of 50 worlds.
+    #[arg(long, default_value_t = 0, value_name = "K")]
+    pub clutter_worlds: usize,
     /// Random start/target pairs per world (default: one per seed). Pair i uses noise seed
     /// A+i, so pairs are the same for every method.
     #[arg(long, value_name = "N")]
@@ -235,6 +241,7 @@ fn row_of(job: &Job, run: SimRun) -> BatchRow {
         geodesic_m: s.geodesic_m,
         spl: s.spl,
         cpu_time_s: s.cpu_time_s,
+        final_position_sigma_m: s.position_sigma_m.last().copied(),
         note: s.note,
     }
 }

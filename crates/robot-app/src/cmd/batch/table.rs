@@ -11,7 +11,7 @@ use slam::eval::{median, percentile};
 pub struct BatchRow {
     /// Group the run is reported in.
     pub group: String,
-    /// World kind: `paper`, `random`, `corridor` or `file`.
+    /// World kind: `paper`, `random`, `corridor`, `clutter` or `file`.
     pub kind: WorldKind,
     /// World name.
     pub world: String,
@@ -53,6 +53,8 @@ pub struct BatchRow {
     pub spl: Option<f64>,
     /// CPU time, seconds.
     pub cpu_time_s: f64,
+    /// The navigator's position uncertainty at the end, metres (its own error model).
+    pub final_position_sigma_m: Option<f64>,
     /// How it ended.
     pub note: String,
 }
