@@ -83,7 +83,9 @@ pub fn frontiers(
                 .any(|(dc, dr)| state(c + dc, r + dr) == CellState::Unknown)
     };
     let mut seen = vec![false; w * h];
-    let reach = (params.target_clearance_m / res).ceil() as i64;
+    // Clearances are looked for out to the larger of the target clearance and the radius.
+    let search_m = params.target_clearance_m.max(radius_m);
+    let reach = (search_m / res).ceil() as i64;
     let min_cells = (params.min_frontier_m / res).ceil().max(1.0) as usize;
     let mut out = Vec::new();
     for k in 0..w * h {
@@ -124,7 +126,7 @@ pub fn frontiers(
                     }
                 }
             }
-            ((best as f64).sqrt() * res).min(params.target_clearance_m)
+            ((best as f64).sqrt() * res).min(search_m)
         };
         let centre = |(c, r): (i64, i64)| grid.cell_centre(c as usize, r as usize);
         let mut order: Vec<(f64, (i64, i64))> = cells
@@ -240,7 +242,7 @@ where
         if let Some(last) = goals.last_mut() {
             last.reason = reason;
             last.legs = nav.legs().len().saturating_sub(legs_at_goal);
-            let r = if reason == Reason::Reached {
+            let r = if matches!(reason, Reason::Reached | Reason::UncertainArrival) {
                 params.reached_radius_m
             } else {
                 params.failed_radius_m
@@ -249,7 +251,7 @@ where
         }
         if !matches!(
             reason,
-            Reason::Reached | Reason::Unreachable | Reason::LegLimit
+            Reason::Reached | Reason::UncertainArrival | Reason::Unreachable | Reason::LegLimit
         ) {
             break ExploreEnd::Failed;
         }

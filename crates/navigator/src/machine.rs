@@ -87,10 +87,8 @@ enum State {
 const NARROW_MISS_M: f64 = 0.05;
 /// Turns again toward a missed narrow passage before driving what is free.
 const NARROW_RETRIES: usize = 6;
-/// The most a SLAM refinement may move beyond the search window, metres (the slam front
-/// end's `max_refine_shift_m`)...
-const SLAM_REFINE_SHIFT_M: f64 = 0.2;
-/// ... and turn, degrees.
+/// The most a SLAM refinement may turn beyond the search window, degrees (its shift is the
+/// slam front end's `max_refine_shift_m`).
 const SLAM_REFINE_TURN_DEG: f64 = 2.0;
 
 /// The goal-seeking loop of `docs/method.md` for one run, from `start` to `goal`.
@@ -357,8 +355,8 @@ impl Navigator {
         self.set_pending(Action::Finish(self.reason()))
     }
 
-    /// Sets a new target once the run to the last one has finished `reached`, `unreachable`
-    /// or at the leg limit (exploration, waypoints). The estimate, the map and the planner's
+    /// Sets a new target once the run to the last one has finished `reached` (or
+    /// `uncertain_arrival`), `unreachable` or at the leg limit (exploration, waypoints). The estimate, the map and the planner's
     /// memory carry over; the leg limit counts from here. Returns the next action (a scan),
     /// or an error for a goal that is not finite or a run that has not finished that way.
     pub fn retarget(&mut self, goal: WorldPoint) -> Result<Action, NavigatorError> {
@@ -368,7 +366,7 @@ impl Navigator {
         };
         if !matches!(
             reason,
-            Reason::Reached | Reason::Unreachable | Reason::LegLimit
+            Reason::Reached | Reason::UncertainArrival | Reason::Unreachable | Reason::LegLimit
         ) {
             return Err(NavigatorError::EndedBy(reason));
         }
@@ -891,7 +889,8 @@ impl Navigator {
             // Never farther than the search window and the refinement's largest shift.
             let shift = pose.position().distance_m(&prediction.position());
             let turn = scan_types::angle_diff_rad(pose.theta_rad, prediction.theta_rad).abs();
-            if shift > l.slam_window_m * std::f64::consts::SQRT_2 + SLAM_REFINE_SHIFT_M
+            let refine_m = slam::FrontEndParams::default().max_refine_shift_m;
+            if shift > l.slam_window_m * std::f64::consts::SQRT_2 + refine_m
                 || turn > (l.slam_window_deg + SLAM_REFINE_TURN_DEG).to_radians()
             {
                 tracing::debug!(shift, turn, "slam placement outside its window; refused");

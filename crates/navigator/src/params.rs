@@ -170,7 +170,7 @@ pub struct LocaliserParams {
     pub map_resolution_m: f64,
     /// A drive's scan match that turns the robot more than this from the drive's heading is
     /// refused (the base drives straight; such a match paired the wrong points), degrees.
-    #[serde(default = "default_drive_max_turn_deg")]
+    #[serde(default = "no_drive_turn_gate")]
     pub drive_max_turn_deg: f64,
     /// Online SLAM: every turn chunk's scan, every `slam_step_m` of a drive and every leg's
     /// last scan are placed against a submap of recent keyframes by the slam crate's
@@ -283,6 +283,12 @@ fn default_drive_max_turn_deg() -> f64 {
     1.0
 }
 
+/// A configuration without `drive_max_turn_deg` (a recording made before it) runs as then:
+/// no gate.
+fn no_drive_turn_gate() -> f64 {
+    180.0
+}
+
 fn default_slam_window_m() -> f64 {
     0.3
 }
@@ -324,7 +330,8 @@ pub struct LoopParams {
     #[serde(default = "default_min_legs")]
     pub min_legs: usize,
     /// Legs allowed per metre of the straight line from the start to the target, when that
-    /// is more than `min_legs`: the limit grows with the world.
+    /// is more than `min_legs`: the limit grows with the world. A configuration without it (a
+    /// recording made before it) gets 0, a fixed limit, as then.
     #[serde(default)]
     pub legs_per_m: f64,
     /// The estimate within this of the target counts as arrival, metres.

@@ -60,17 +60,32 @@ fn a_doorway_is_the_one_frontier_and_its_target_lies_beyond_it() {
         "{t:?}"
     );
     assert!(f[0].clearance_m >= 0.3, "{:?}", f[0]);
-    // A robot wider than the target's clearance finds no frontier.
-    assert!(
-        frontiers(
-            &grid,
-            WorldPoint::new(0.0, 0.0),
-            0.45,
-            &[],
-            &ExploreParams::default()
-        )
-        .is_empty()
+    // A wider robot (0.45 m, more than the 0.4 m target clearance) still finds it: the fan
+    // beyond the 1 m doorway is 2.6 m wide at 4 m.
+    let wide = frontiers(
+        &grid,
+        WorldPoint::new(0.0, 0.0),
+        0.45,
+        &[],
+        &ExploreParams::default(),
     );
+    assert_eq!(wide.len(), 1, "{wide:?}");
+    assert!(
+        wide[0].clearance_m >= 0.45 && wide[0].target.x_m() > 1.52,
+        "{wide:?}"
+    );
+    // A target within 0.5 m of a point to avoid is not taken: another cell of the frontier is,
+    // outside that disc.
+    let avoid = [(t, 0.5)];
+    let other = frontiers(
+        &grid,
+        WorldPoint::new(0.0, 0.0),
+        0.3,
+        &avoid,
+        &ExploreParams::default(),
+    );
+    assert_eq!(other.len(), 1, "{other:?}");
+    assert!(other[0].target.distance_m(&t) > 0.5, "{other:?}");
 }
 
 #[test]

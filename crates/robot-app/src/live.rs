@@ -51,7 +51,7 @@ const MAP_PERIOD: Duration = Duration::from_secs(1);
 /// messages (the final map) reach it.
 const LINGER: Duration = Duration::from_secs(1);
 
-/// `--live` and `--live-wait`, shared by `sim`, `run`, `replay` and `slam`.
+/// `--live` and `--live-wait`, shared by `sim`, `explore`, `run`, `replay` and `slam`.
 #[derive(Debug, Clone, Default, Args)]
 pub struct LiveOptions {
     /// Serve a live view of the run (Foxglove WebSocket protocol) on ADDR:PORT; without a
@@ -135,15 +135,19 @@ impl LiveView {
         let server = ctx
             .websocket_server()
             .name(format!("goalseek robot-app {}", env!("CARGO_PKG_VERSION")))
-            .bind(host, port)
+            .bind(host.clone(), port)
             .start_blocking()
             .with_context(|| {
                 format!(
                     "--live {addr}: cannot serve the live view there (the port is taken, or the address is not one of this machine's); give another with --live ADDR:PORT"
                 )
             })?;
-        let bound = format!("{addr} (port {})", server.port());
-        tracing::info!("live view on ws://{addr}: connect Foxglove or Lichtblick to it");
+        let bound = if host.contains(':') {
+            format!("[{host}]:{}", server.port())
+        } else {
+            format!("{host}:{}", server.port())
+        };
+        tracing::info!("live view on ws://{bound}: connect Foxglove or Lichtblick to it");
         Ok(LiveView {
             _ctx: ctx.clone(),
             addr: bound,
@@ -342,8 +346,14 @@ impl LiveView {
         let t0 = *p.first_stamp_s.get_or_insert(stamp_s);
         let due = (stamp_s - t0) / p.rate;
         let now = p.started.elapsed().as_secs_f64();
-        if due > now {
-            std::thread::sleep(Duration::from_secs_f64((due - now).min(60.0)));
+        // In slices, so that Ctrl-C is heard; at most 60 s per scan.
+        let end = p.started + Duration::from_secs_f64(now + (due - now).clamp(0.0, 60.0));
+        while !crate::interrupt::requested() {
+            let left = end.saturating_duration_since(Instant::now());
+            if left.is_zero() {
+                break;
+            }
+            std::thread::sleep(left.min(Duration::from_millis(100)));
         }
     }
 

@@ -79,7 +79,11 @@ impl GenParams {
             // Start and target sit CLUTTER_END_M from the side walls, apart by at least 1 m.
             if self.width_m < 2.0 * CLUTTER_END_M + 1.0 || self.height_m < 2.0 {
                 return bad(
-                    "width_m",
+                    if self.height_m < 2.0 {
+                        "height_m"
+                    } else {
+                        "width_m"
+                    },
                     format!(
                         "a clutter-only world needs at least {} m x 2 m",
                         2.0 * CLUTTER_END_M + 1.0

@@ -189,7 +189,6 @@ pub fn run(args: ExploreArgs) -> anyhow::Result<()> {
     setup
         .check_scenario(setup.start.position())
         .map_err(|e| anyhow::anyhow!("{e}; give a start in its free space with --start"))?;
-    args.options.write_config(&config)?;
     let params = ExploreParams {
         max_goals: args.max_goals,
         legs_per_goal: args.legs_per_goal,
@@ -198,6 +197,7 @@ pub fn run(args: ExploreArgs) -> anyhow::Result<()> {
     if params.max_goals == 0 || params.legs_per_goal == 0 {
         bail!("--max-goals and --legs-per-goal must be at least 1");
     }
+    args.options.write_config(&config)?;
 
     let live = args
         .live
