@@ -1,8 +1,6 @@
 //! `robot-app explore`: map an unknown world with no target, driving to the frontiers of the
 //! robot's own map until none is left; in the simulator, with coverage and map accuracy.
 
-use std::path::PathBuf;
-
 use anyhow::{Context, bail};
 use clap::Args;
 use image::ImageEncoder;
@@ -10,7 +8,7 @@ use localiser::{CellState, OccupancyGrid};
 use navigator::{ExploreEnd, ExploreParams, Reason};
 use scan_types::{Pose2, WorldPoint};
 use serde::Serialize;
-use sim_laser::{FreeSpace, PAIR_CELL_M, SensorPreset, SimSetup, World, paper_start};
+use sim_laser::{FreeSpace, PAIR_CELL_M, World, paper_start};
 
 use crate::cmd::sim::thread_cpu_time_s;
 use crate::outputs::write_atomic;
@@ -19,22 +17,13 @@ use crate::runloop::explore_loop;
 /// Arguments of `robot-app explore`.
 #[derive(Debug, Args)]
 pub struct ExploreArgs {
-    /// World file (as `robot-app sim --world`). Default: the paper's world.
-    #[arg(long, value_name = "PATH")]
-    pub world: Option<PathBuf>,
+    /// World, sensor, seed and noise (as `sim`).
+    #[command(flatten)]
+    pub sim: super::sim::SimWorldArgs,
     /// Start pose X,Y,THETA_DEG (default: the world file's start, the paper's in its world,
     /// else a seeded random pose in the largest free region).
     #[arg(long, value_name = "X,Y,THETA_DEG", allow_hyphen_values = true)]
     pub start: Option<String>,
-    /// Sensor preset: paper, urg-04lx, utm-30lx or ust-10lx.
-    #[arg(long, default_value = "paper")]
-    pub sensor: String,
-    /// Noise seed.
-    #[arg(long, default_value_t = 0)]
-    pub seed: u64,
-    /// `off` turns laser and motion noise off; `on` (or `default`) keeps the preset's noise.
-    #[arg(long, value_enum, default_value = "on")]
-    pub noise: super::Noise,
     /// Most frontiers to try.
     #[arg(long, default_value_t = ExploreParams::default().max_goals)]
     pub max_goals: usize,
@@ -156,19 +145,10 @@ pub fn run(args: ExploreArgs) -> anyhow::Result<()> {
         bail!("--record: not supported by explore yet");
     }
     let config = args.options.load()?;
-    let mut setup = match &args.world {
-        None => SimSetup::load(None)?,
-        Some(p) => {
-            SimSetup::load(Some(p)).with_context(|| format!("cannot load world {}", p.display()))?
-        }
-    };
-    setup.sensor = args
-        .sensor
-        .parse::<SensorPreset>()
-        .map_err(|e| anyhow::anyhow!("--sensor {}: {e}", args.sensor))?;
+    let mut setup = args.sim.setup()?;
     // The world file's start, else (a map without one) a seeded random start in the largest
     // free region.
-    let file_start = match &args.world {
+    let file_start = match &args.sim.world {
         None => Some(paper_start()),
         Some(p) if p.extension().is_some_and(|e| e == "toml") => sim_laser::read_description(p)
             .with_context(|| format!("reading the scenario of {}", p.display()))?
@@ -180,11 +160,9 @@ pub fn run(args: ExploreArgs) -> anyhow::Result<()> {
         (Some(s), _) => scan_types::parse_pose_deg(s).context("--start")?,
         (None, Some(s)) => s,
         (None, None) => FreeSpace::new(&setup.world, config.robot.radius_m + 0.1, PAIR_CELL_M)
-            .random_start(args.seed)
+            .random_start(args.sim.seed)
             .context("no free space for the robot in the world: give --start")?,
     };
-    setup.seed = args.seed;
-    setup.noise = args.noise.is_on();
     setup.robot_radius_m = config.robot.radius_m;
     setup
         .check_scenario(setup.start.position())

@@ -15,20 +15,14 @@ use scan_log::write_trajectory;
 /// A simulated run counts as a success when the true position ends this close to the target.
 pub const SUCCESS_RADIUS_M: f64 = 0.3;
 
-/// Arguments of `robot-app sim`.
+/// The simulated world, sensor, seed and noise: the options `sim` and `explore` share.
 #[derive(Debug, Args)]
-pub struct SimArgs {
+pub struct SimWorldArgs {
     /// World file: goalseek .toml (with its own start and target), map_server .yaml, or a
     /// Stage .png (0.02 m per pixel; give another size in a .yaml or .toml beside it). Default:
     /// the paper's world.
     #[arg(long, value_name = "PATH")]
     pub world: Option<PathBuf>,
-    /// Start pose X,Y,THETA_DEG (default: the paper's -3.92,-4.26,45).
-    #[arg(long, value_name = "X,Y,THETA_DEG", allow_hyphen_values = true)]
-    pub start: Option<String>,
-    /// Target X,Y (default: the paper's 4,4).
-    #[arg(long, value_name = "X,Y", allow_hyphen_values = true)]
-    pub goal: Option<String>,
     /// Sensor preset: paper, urg-04lx, utm-30lx or ust-10lx.
     #[arg(long, default_value = "paper")]
     pub sensor: String,
@@ -38,6 +32,38 @@ pub struct SimArgs {
     /// `off` turns laser and motion noise off; `on` (or `default`) keeps the preset's noise.
     #[arg(long, value_enum, default_value = "on")]
     pub noise: super::Noise,
+}
+
+impl SimWorldArgs {
+    /// The simulation these options give (its start still the world's default).
+    pub fn setup(&self) -> anyhow::Result<SimSetup> {
+        let mut setup = match &self.world {
+            None => SimSetup::load(None)?,
+            Some(p) => SimSetup::load(Some(p))
+                .with_context(|| format!("cannot load world {}", p.display()))?,
+        };
+        setup.sensor = self
+            .sensor
+            .parse::<SensorPreset>()
+            .map_err(|e| anyhow::anyhow!("--sensor {}: {e}", self.sensor))?;
+        setup.seed = self.seed;
+        setup.noise = self.noise.is_on();
+        Ok(setup)
+    }
+}
+
+/// Arguments of `robot-app sim`.
+#[derive(Debug, Args)]
+pub struct SimArgs {
+    /// World, sensor, seed and noise.
+    #[command(flatten)]
+    pub sim: SimWorldArgs,
+    /// Start pose X,Y,THETA_DEG (default: the paper's -3.92,-4.26,45).
+    #[arg(long, value_name = "X,Y,THETA_DEG", allow_hyphen_values = true)]
+    pub start: Option<String>,
+    /// Target X,Y (default: the paper's 4,4).
+    #[arg(long, value_name = "X,Y", allow_hyphen_values = true)]
+    pub goal: Option<String>,
     /// Configuration, output folder, recording.
     #[command(flatten)]
     pub options: super::LoopOptions,
@@ -266,18 +292,9 @@ pub fn write_outputs(dir: &Path, run: &SimRun, title: &str) -> anyhow::Result<()
 /// Runs `robot-app sim`.
 pub fn run(args: SimArgs) -> anyhow::Result<()> {
     let config = args.options.load()?;
-    let mut setup = match &args.world {
-        None => SimSetup::load(None)?,
-        Some(p) => {
-            SimSetup::load(Some(p)).with_context(|| format!("cannot load world {}", p.display()))?
-        }
-    };
-    setup.sensor = args
-        .sensor
-        .parse::<SensorPreset>()
-        .map_err(|e| anyhow::anyhow!("--sensor {}: {e}", args.sensor))?;
+    let mut setup = args.sim.setup()?;
     // A world file's own scenario unless the command line gives one.
-    let (file_start, file_goal) = match &args.world {
+    let (file_start, file_goal) = match &args.sim.world {
         None => (paper_start(), paper_target()),
         Some(p) => sim_laser::file_scenario(Some(p))
             .with_context(|| format!("reading the scenario of {}", p.display()))?,
@@ -290,8 +307,6 @@ pub fn run(args: SimArgs) -> anyhow::Result<()> {
         Some(s) => scan_types::parse_point(s).context("--goal")?,
         None => file_goal,
     };
-    setup.seed = args.seed;
-    setup.noise = args.noise.is_on();
     let spec = SimSpec::new(setup, goal, config);
     spec.setup.check_scenario(goal).map_err(|e| {
         anyhow::anyhow!("{e}; give a start and a goal in its free space with --start and --goal")
