@@ -24,6 +24,14 @@ pub struct ExploreArgs {
     /// else a seeded random pose in the largest free region).
     #[arg(long, value_name = "X,Y,THETA_DEG", allow_hyphen_values = true)]
     pub start: Option<String>,
+    /// Explore on a real robot: the Hokuyo's serial device, or tcp:HOST:PORT for an Ethernet
+    /// model (no simulator: no coverage, accuracy or errors).
+    #[arg(long, value_name = "PATH|tcp:HOST:PORT", conflicts_with_all = ["world", "seed", "noise"])]
+    pub port: Option<String>,
+    /// With --port: the motion base, stdio (line protocol on stdin/stdout),
+    /// `serial:PATH[@BAUD]` or manual (the default).
+    #[arg(long, value_name = "BASE", requires = "port")]
+    pub base: Option<String>,
     /// Most frontiers to try.
     #[arg(long, default_value_t = ExploreParams::default().max_goals)]
     pub max_goals: usize,
@@ -72,7 +80,7 @@ pub struct ExploreSummary {
     pub legs: usize,
     /// Scans taken.
     pub scans: usize,
-    /// Collisions the simulator recorded.
+    /// Collisions the simulator recorded (0 on a real robot).
     pub collisions: usize,
     /// Distance commanded, metres.
     pub path_length_m: f64,
@@ -90,8 +98,8 @@ pub struct ExploreSummary {
     pub cpu_time_s: f64,
     /// Method preset used.
     pub method: String,
-    /// Noise seed.
-    pub seed: u64,
+    /// Noise seed (simulator).
+    pub seed: Option<u64>,
     /// Start pose `[x, y, theta_deg]`.
     pub start: [f64; 3],
 }
@@ -139,34 +147,18 @@ pub fn map_quality(
     (coverage, accuracy)
 }
 
-/// Runs `robot-app explore` in the simulator.
+/// What one exploration gave: its summary, its run, and in the simulator the true world.
+struct Explored {
+    summary: ExploreSummary,
+    run: crate::runloop::ExploreRun,
+    world: Option<(std::sync::Arc<World>, String)>,
+}
+
+/// Runs `robot-app explore`: in the simulator, or with `--port` on a real Hokuyo and base.
 pub fn run(args: ExploreArgs) -> anyhow::Result<()> {
     if args.options.record.is_some() {
         bail!("--record: not supported by explore yet");
     }
-    let config = args.options.load()?;
-    let mut setup = args.sim.setup()?;
-    // The world file's start, else (a map without one) a seeded random start in the largest
-    // free region.
-    let file_start = match &args.sim.world {
-        None => Some(paper_start()),
-        Some(p) if p.extension().is_some_and(|e| e == "toml") => sim_laser::read_description(p)
-            .with_context(|| format!("reading the scenario of {}", p.display()))?
-            .start
-            .map(|[x, y, t]| Pose2::new(x, y, t)),
-        Some(_) => None,
-    };
-    setup.start = match (&args.start, file_start) {
-        (Some(s), _) => scan_types::parse_pose_deg(s).context("--start")?,
-        (None, Some(s)) => s,
-        (None, None) => FreeSpace::new(&setup.world, config.robot.radius_m + 0.1, PAIR_CELL_M)
-            .random_start(args.sim.seed)
-            .context("no free space for the robot in the world: give --start")?,
-    };
-    setup.robot_radius_m = config.robot.radius_m;
-    setup
-        .check_scenario(setup.start.position())
-        .map_err(|e| anyhow::anyhow!("{e}; give a start in its free space with --start"))?;
     let params = ExploreParams {
         max_goals: args.max_goals,
         legs_per_goal: args.legs_per_goal,
@@ -175,52 +167,75 @@ pub fn run(args: ExploreArgs) -> anyhow::Result<()> {
     if params.max_goals == 0 || params.legs_per_goal == 0 {
         bail!("--max-goals and --legs-per-goal must be at least 1");
     }
-    args.options.write_config(&config)?;
-
-    let live = args
-        .live
-        .start(config.localiser.map_resolution_m)?
-        .map(|v| v.with_rate(args.live_rate));
-    let live = live.map(std::cell::RefCell::new);
-    let geometry = setup.sensor.geometry();
-    let cpu0 = thread_cpu_time_s();
-    let sim = setup.build()?;
-    let (mut laser, mut base, truth) = sim.split();
-    let mut on_scan = |scan: &scan_types::Scan, estimate: &Pose2| {
-        if let Some(v) = &live {
-            v.borrow_mut()
-                .scan(&geometry, scan, Some(*estimate), Some(truth.pose()));
-        }
+    let config = args.options.load()?;
+    let explored = match &args.port {
+        Some(port) => explore_robot(&args, port, &config, &params)?,
+        None => explore_sim(&args, &config, &params)?,
     };
-    let mut on_leg = |leg: &navigator::Leg| {
-        if let Some(v) = &live {
-            v.borrow_mut().leg(leg);
-        }
-    };
-    let run = explore_loop(
-        &mut laser,
-        &mut base,
-        &config,
-        &params,
-        setup.start,
-        Some(&truth),
-        Some(&mut on_scan),
-        Some(&mut on_leg),
-    )?;
-    let cpu = thread_cpu_time_s() - cpu0;
-    if let Some(v) = live {
-        v.into_inner().finish(Some(&run.exploration.outcome.grid));
+    let summary = &explored.summary;
+    let name = explored.world.as_ref().map_or("robot", |(_, n)| n.as_str());
+    write_outputs(&args.options.out, &explored.run, summary, name)?;
+    if let Some((world, _)) = &explored.world {
+        write_truth_png(
+            &args.options.out.join("truth.png"),
+            world,
+            config.localiser.map_resolution_m,
+        )?;
     }
+    let pct = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{:.1} %", 100.0 * v));
+    #[allow(clippy::print_stdout)]
+    {
+        println!(
+            "{}: {} frontiers tried ({} reached), {} legs, coverage {}, map accuracy {}, collisions {}, final localisation error {}, outputs in {}",
+            match summary.end {
+                ExploreEnd::Explored => "explored",
+                ExploreEnd::GoalLimit => "goal limit",
+                ExploreEnd::Failed => "failed",
+            },
+            summary.goals_tried,
+            summary.goals_reached,
+            summary.legs,
+            pct(summary.coverage),
+            pct(summary.map_accuracy),
+            summary.collisions,
+            summary
+                .final_position_error_m
+                .map_or("-".to_string(), |e| format!("{e:.3} m")),
+            args.options.out.display()
+        );
+    }
+    if summary.reason == Reason::Interrupted {
+        return Err(crate::interrupt::Interrupted.into());
+    }
+    if summary.end == ExploreEnd::Failed || summary.collisions > 0 {
+        bail!(
+            "the exploration failed: {} ({})",
+            summary.reason,
+            summary.note
+        );
+    }
+    Ok(())
+}
+
+/// What the simulator knows beside an exploration: collisions, distance driven, true pose.
+struct Truth {
+    collisions: usize,
+    travelled_m: f64,
+    pose: Pose2,
+}
+
+/// The `explore.json` of `run`.
+fn summary_of(
+    run: &crate::runloop::ExploreRun,
+    config: &crate::config::Params,
+    (start, seed): (Pose2, Option<u64>),
+    truth: Option<&Truth>,
+    (coverage, map_accuracy): (Option<f64>, Option<f64>),
+    cpu_time_s: f64,
+) -> ExploreSummary {
     let ex = &run.exploration;
-    let (coverage, map_accuracy) = map_quality(
-        &setup.world,
-        setup.robot_radius_m,
-        setup.start.position(),
-        &ex.outcome.grid,
-    );
-    let collisions = truth.collisions();
-    let t = truth.pose();
-    let summary = ExploreSummary {
+    let collisions = truth.map_or(0, |t| t.collisions);
+    ExploreSummary {
         end: ex.end,
         reason: if collisions > 0 {
             Reason::Collision
@@ -247,52 +262,168 @@ pub fn run(args: ExploreArgs) -> anyhow::Result<()> {
         scans: ex.outcome.scans,
         collisions,
         path_length_m: ex.outcome.path_length_m,
-        true_path_length_m: Some(truth.travelled_m()),
+        true_path_length_m: truth.map(|t| t.travelled_m),
         coverage,
         map_accuracy,
-        final_position_error_m: Some(ex.outcome.estimate.position().distance_m(&t.position())),
+        final_position_error_m: truth.map(|t| {
+            ex.outcome
+                .estimate
+                .position()
+                .distance_m(&t.pose.position())
+        }),
         ate_rmse_m: run.log.ate_rmse_m(),
-        cpu_time_s: cpu,
+        cpu_time_s,
         method: config.method.to_string(),
-        seed: setup.seed,
-        start: pose_deg(&setup.start),
+        seed,
+        start: pose_deg(&start),
+    }
+}
+
+/// The live view's scan and leg hooks, as `sim` and `run` feed it.
+type LiveCell = Option<std::cell::RefCell<crate::live::LiveView>>;
+
+/// Explores in the simulator.
+fn explore_sim(
+    args: &ExploreArgs,
+    config: &crate::config::Params,
+    params: &ExploreParams,
+) -> anyhow::Result<Explored> {
+    let mut setup = args.sim.setup()?;
+    // The world file's start, else (a map without one) a seeded random start in the largest
+    // free region.
+    let file_start = match &args.sim.world {
+        None => Some(paper_start()),
+        Some(p) if p.extension().is_some_and(|e| e == "toml") => sim_laser::read_description(p)
+            .with_context(|| format!("reading the scenario of {}", p.display()))?
+            .start
+            .map(|[x, y, t]| Pose2::new(x, y, t)),
+        Some(_) => None,
     };
-    write_outputs(&args.options.out, &run, &summary, &setup.world_name)?;
-    write_truth_png(
-        &args.options.out.join("truth.png"),
-        &setup.world,
-        config.localiser.map_resolution_m,
+    setup.start = match (&args.start, file_start) {
+        (Some(s), _) => scan_types::parse_pose_deg(s).context("--start")?,
+        (None, Some(s)) => s,
+        (None, None) => FreeSpace::new(&setup.world, config.robot.radius_m + 0.1, PAIR_CELL_M)
+            .random_start(args.sim.seed)
+            .context("no free space for the robot in the world: give --start")?,
+    };
+    setup.robot_radius_m = config.robot.radius_m;
+    setup
+        .check_scenario(setup.start.position())
+        .map_err(|e| anyhow::anyhow!("{e}; give a start in its free space with --start"))?;
+    args.options.write_config(config)?;
+    let live: LiveCell = args
+        .live
+        .start(config.localiser.map_resolution_m)?
+        .map(|v| std::cell::RefCell::new(v.with_rate(args.live_rate)));
+    let geometry = setup.sensor.geometry();
+    let cpu0 = thread_cpu_time_s();
+    let (mut laser, mut base, truth) = setup.build()?.split();
+    let mut on_scan = |scan: &scan_types::Scan, estimate: &Pose2| {
+        if let Some(v) = &live {
+            v.borrow_mut()
+                .scan(&geometry, scan, Some(*estimate), Some(truth.pose()));
+        }
+    };
+    let mut on_leg = |leg: &navigator::Leg| {
+        if let Some(v) = &live {
+            v.borrow_mut().leg(leg);
+        }
+    };
+    let run = explore_loop(
+        &mut laser,
+        &mut base,
+        config,
+        params,
+        setup.start,
+        Some(&truth),
+        Some(&mut on_scan),
+        Some(&mut on_leg),
     )?;
-    #[allow(clippy::print_stdout)]
-    {
-        println!(
-            "{}: {} frontiers tried ({} reached), {} legs, coverage {:.1} %, map accuracy {:.1} %, collisions {}, final localisation error {:.3} m, outputs in {}",
-            match summary.end {
-                ExploreEnd::Explored => "explored",
-                ExploreEnd::GoalLimit => "goal limit",
-                ExploreEnd::Failed => "failed",
-            },
-            summary.goals_tried,
-            summary.goals_reached,
-            summary.legs,
-            100.0 * coverage.unwrap_or(f64::NAN),
-            100.0 * map_accuracy.unwrap_or(f64::NAN),
-            collisions,
-            summary.final_position_error_m.unwrap_or(f64::NAN),
-            args.options.out.display()
-        );
+    let cpu = thread_cpu_time_s() - cpu0;
+    if let Some(v) = live {
+        v.into_inner().finish(Some(&run.exploration.outcome.grid));
     }
-    if summary.reason == Reason::Interrupted {
-        return Err(crate::interrupt::Interrupted.into());
+    let quality = map_quality(
+        &setup.world,
+        setup.robot_radius_m,
+        setup.start.position(),
+        &run.exploration.outcome.grid,
+    );
+    let t = Truth {
+        collisions: truth.collisions(),
+        travelled_m: truth.travelled_m(),
+        pose: truth.pose(),
+    };
+    let summary = summary_of(
+        &run,
+        config,
+        (setup.start, Some(setup.seed)),
+        Some(&t),
+        quality,
+        cpu,
+    );
+    Ok(Explored {
+        summary,
+        run,
+        world: Some((setup.world.clone(), setup.world_name.clone())),
+    })
+}
+
+/// Explores with a real Hokuyo at `port` and the base of `--base`: no truth, so no coverage,
+/// accuracy or errors.
+fn explore_robot(
+    args: &ExploreArgs,
+    port: &str,
+    config: &crate::config::Params,
+    params: &ExploreParams,
+) -> anyhow::Result<Explored> {
+    let start = match &args.start {
+        Some(s) => scan_types::parse_pose_deg(s).context("--start")?,
+        None => Pose2::new(0.0, 0.0, 0.0),
+    };
+    args.options.write_config(config)?;
+    let mut base = super::run::open_base(args.base.as_deref().unwrap_or("manual"))?;
+    let mut laser = super::open_sensor(port, urg_driver::UrgConfig::default())?;
+    let geometry = *scan_types::LaserSource::geometry(&laser);
+    tracing::info!(port, rays = geometry.ray_count, "sensor connected");
+    let live: LiveCell = args
+        .live
+        .start(config.localiser.map_resolution_m)?
+        .map(std::cell::RefCell::new);
+    let mut on_scan = |scan: &scan_types::Scan, estimate: &Pose2| {
+        if let Some(v) = &live {
+            v.borrow_mut().scan(&geometry, scan, Some(*estimate), None);
+        }
+    };
+    let mut on_leg = |leg: &navigator::Leg| {
+        if let Some(v) = &live {
+            v.borrow_mut().leg(leg);
+        }
+    };
+    let cpu0 = thread_cpu_time_s();
+    let run = explore_loop(
+        &mut laser,
+        &mut *base,
+        config,
+        params,
+        start,
+        None,
+        Some(&mut on_scan),
+        Some(&mut on_leg),
+    )?;
+    let cpu = thread_cpu_time_s() - cpu0;
+    if let Some(v) = live {
+        v.into_inner().finish(Some(&run.exploration.outcome.grid));
     }
-    if summary.end == ExploreEnd::Failed || collisions > 0 {
-        bail!(
-            "the exploration failed: {} ({})",
-            summary.reason,
-            summary.note
-        );
+    if let Some(urg) = laser.urg_mut() {
+        let _ = urg.stop();
     }
-    Ok(())
+    let summary = summary_of(&run, config, (start, None), None, (None, None), cpu);
+    Ok(Explored {
+        summary,
+        run,
+        world: None,
+    })
 }
 
 /// Writes the true world as a PNG at `cell_m` per pixel (obstacles black, free space white,
@@ -344,11 +475,15 @@ fn write_outputs(
         .with_context(|| format!("writing map.pgm/map.yaml in {}", dir.display()))?;
     grid.to_png(&dir.join("map.png"))
         .with_context(|| format!("writing map.png in {}", dir.display()))?;
+    let seed = summary
+        .seed
+        .map_or(String::new(), |s| format!(", seed {s}"));
+    let coverage = summary
+        .coverage
+        .map_or(String::new(), |c| format!(", coverage {:.0} %", 100.0 * c));
     let title = format!(
-        "explore — {world}, seed {}: {} frontiers, coverage {:.0} %",
-        summary.seed,
-        summary.goals_tried,
-        100.0 * summary.coverage.unwrap_or(f64::NAN)
+        "explore — {world}{seed}: {} frontiers{coverage}",
+        summary.goals_tried
     );
     crate::plot::write_plots(dir, &run.log, &title)
 }
