@@ -83,8 +83,7 @@ fn a_room_is_explored_on_a_real_robot_s_code_path() {
     assert!(commands > 0);
     assert_eq!(truth.collisions(), 0);
     let s: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.join("explore.json")).unwrap())
-            .unwrap();
+        serde_json::from_str(&std::fs::read_to_string(dir.join("explore.json")).unwrap()).unwrap();
     assert_eq!(s["end"], "explored", "{s}");
     assert!(s["goals_tried"].as_u64().unwrap() >= 1, "{s}");
     // No truth on a robot: no coverage, accuracy, error or seed, and no truth.png.
@@ -92,7 +91,13 @@ fn a_room_is_explored_on_a_real_robot_s_code_path() {
         assert!(s[k].is_null(), "{k}: {s}");
     }
     assert!(!dir.join("truth.png").exists());
-    for f in ["map.pgm", "map.yaml", "map.png", "trajectory.csv", "config.toml"] {
+    for f in [
+        "map.pgm",
+        "map.yaml",
+        "map.png",
+        "trajectory.csv",
+        "config.toml",
+    ] {
         assert!(dir.join(f).is_file(), "{f}");
     }
 }
