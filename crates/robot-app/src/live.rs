@@ -85,6 +85,30 @@ impl LiveOptions {
     }
 }
 
+/// `--live`, `--live-wait` and `--live-rate`: the live view of a simulated run, paced by its
+/// clock (`sim`, `explore`).
+#[derive(Debug, Clone, Default, Args)]
+pub struct PacedLiveOptions {
+    /// Live view.
+    #[command(flatten)]
+    pub live: LiveOptions,
+    /// With --live: play the run at this many times the simulated clock's speed, so a viewer
+    /// can follow it (0: as fast as it computes).
+    #[arg(long, value_name = "RATE", default_value_t = 1.0, requires = "live", value_parser = crate::cmd::non_negative)]
+    pub live_rate: f64,
+}
+
+impl PacedLiveOptions {
+    /// Starts the server when `--live` is given ([`LiveOptions::start`]), paced at
+    /// `--live-rate`.
+    pub fn start(&self, map_resolution_m: f64) -> anyhow::Result<Option<LiveView>> {
+        Ok(self
+            .live
+            .start(map_resolution_m)?
+            .map(|v| v.with_rate(self.live_rate)))
+    }
+}
+
 /// Splits `ADDR:PORT` (`[v6]:PORT` for IPv6) into a host and a port.
 pub fn parse_addr(text: &str) -> anyhow::Result<(String, u16)> {
     let bad = || anyhow::anyhow!("--live {text}: expected ADDR:PORT, e.g. {DEFAULT_ADDR}");

@@ -18,6 +18,21 @@ struct Watch<'a, 'b> {
     legs: Option<LegHook<'b>>,
 }
 
+impl<'a, 'b> Watch<'a, 'b> {
+    /// The simulator's `eval` recorded beside the estimate, `hook` on every scan, `legs` on
+    /// every leg end, Ctrl-C heard.
+    fn new(
+        eval: Option<&'a dyn GroundTruth>,
+        hook: Option<ScanPoseHook<'a>>,
+        legs: Option<LegHook<'b>>,
+    ) -> Self {
+        Self {
+            inner: TruthMonitor::new(eval, hook, interrupted),
+            legs,
+        }
+    }
+}
+
 impl Monitor for Watch<'_, '_> {
     fn scan(&mut self, scan: &scan_types::Scan, estimate: &Pose2) {
         self.inner.scan(scan, estimate);
@@ -81,10 +96,7 @@ where
     M: MotionBase + ?Sized,
 {
     let nav = Navigator::new(params.clone(), *laser.geometry(), start, goal)?;
-    let mut watch = Watch {
-        inner: TruthMonitor::new(eval, hook, interrupted),
-        legs,
-    };
+    let mut watch = Watch::new(eval, hook, legs);
     let outcome = navigator::run(nav, laser, base, &mut watch);
     let log = run_log(&outcome, &watch.inner, Some(goal));
     Ok(LoopRun { outcome, log })
@@ -117,10 +129,7 @@ where
     M: MotionBase + ?Sized,
 {
     let nav = Navigator::new(params.clone(), *laser.geometry(), start, start.position())?;
-    let mut watch = Watch {
-        inner: TruthMonitor::new(eval, hook, interrupted),
-        legs,
-    };
+    let mut watch = Watch::new(eval, hook, legs);
     let exploration = navigator::explore(nav, laser, base, &mut watch, explore);
     let log = run_log(&exploration.outcome, &watch.inner, None);
     Ok(ExploreRun { exploration, log })

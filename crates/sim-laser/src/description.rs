@@ -532,6 +532,26 @@ impl World {
     }
 }
 
+impl World {
+    /// Rasterises the world over its bounds at `cell_m` per pixel and writes it as a PNG
+    /// atomically (obstacles 0, free space 254, north up).
+    pub fn write_png(&self, path: &Path, cell_m: f64) -> Result<(), SimError> {
+        let (lo, hi) = self.bounds();
+        let bm = self.rasterise([lo.x_m(), lo.y_m()], [hi.x_m(), hi.y_m()], cell_m);
+        let mut bytes = Vec::new();
+        bitmap_to_gray(&bm)
+            .write_to(
+                &mut std::io::Cursor::new(&mut bytes),
+                image::ImageFormat::Png,
+            )
+            .map_err(|e| SimError::Image {
+                path: path.to_path_buf(),
+                message: e.to_string(),
+            })?;
+        write_atomic(path, &bytes)
+    }
+}
+
 /// Reads a TOML world file as a description (bitmaps are not part of a description).
 pub fn read_description(path: &Path) -> Result<WorldDescription, SimError> {
     let text = std::fs::read_to_string(path).map_err(|source| SimError::Io {

@@ -3,7 +3,6 @@
 
 use anyhow::{Context, bail};
 use clap::Args;
-use image::ImageEncoder;
 use localiser::{CellState, OccupancyGrid};
 use navigator::{ExploreEnd, ExploreParams, Reason};
 use scan_types::{Pose2, WorldPoint};
@@ -41,13 +40,9 @@ pub struct ExploreArgs {
     /// Configuration and output folder (`--record` is not taken here).
     #[command(flatten)]
     pub options: super::LoopOptions,
-    /// Live view.
+    /// Live view, paced by the simulated clock (`--live-rate` applies in the simulator).
     #[command(flatten)]
-    pub live: crate::live::LiveOptions,
-    /// With --live: play the exploration at this many times the simulated clock's speed (0: as
-    /// fast as it computes).
-    #[arg(long, value_name = "RATE", default_value_t = 1.0, requires = "live", value_parser = super::non_negative)]
-    pub live_rate: f64,
+    pub live: crate::live::PacedLiveOptions,
 }
 
 /// One frontier tried, as `explore.json` lists it.
@@ -176,11 +171,10 @@ pub fn run(args: ExploreArgs) -> anyhow::Result<()> {
     let name = explored.world.as_ref().map_or("robot", |(_, n)| n.as_str());
     write_outputs(&args.options.out, &explored.run, summary, name)?;
     if let Some((world, _)) = &explored.world {
-        write_truth_png(
-            &args.options.out.join("truth.png"),
-            world,
-            config.localiser.map_resolution_m,
-        )?;
+        let path = args.options.out.join("truth.png");
+        world
+            .write_png(&path, config.localiser.map_resolution_m)
+            .with_context(|| format!("writing {}", path.display()))?;
     }
     let pct = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{:.1} %", 100.0 * v));
     #[allow(clippy::print_stdout)]
@@ -279,8 +273,31 @@ fn summary_of(
     }
 }
 
-/// The live view's scan and leg hooks, as `sim` and `run` feed it.
+/// The live view, when `--live` is given, shared by the scan and leg hooks.
 type LiveCell = Option<std::cell::RefCell<crate::live::LiveView>>;
+
+/// The scan hook that shows every scan, its estimate and `truth()`'s pose on `live`.
+fn live_scan<'a>(
+    live: &'a LiveCell,
+    geometry: &'a scan_types::ScanGeometry,
+    truth: impl Fn() -> Option<Pose2> + 'a,
+) -> impl FnMut(&scan_types::Scan, &Pose2) + 'a {
+    move |scan, estimate| {
+        if let Some(v) = live {
+            v.borrow_mut()
+                .scan(geometry, scan, Some(*estimate), truth());
+        }
+    }
+}
+
+/// The leg hook that shows every leg end on `live`.
+fn live_leg(live: &LiveCell) -> impl FnMut(&navigator::Leg) + '_ {
+    move |leg| {
+        if let Some(v) = live {
+            v.borrow_mut().leg(leg);
+        }
+    }
+}
 
 /// Explores in the simulator.
 fn explore_sim(
@@ -314,31 +331,24 @@ fn explore_sim(
     let live: LiveCell = args
         .live
         .start(config.localiser.map_resolution_m)?
-        .map(|v| std::cell::RefCell::new(v.with_rate(args.live_rate)));
+        .map(std::cell::RefCell::new);
     let geometry = setup.sensor.geometry();
     let cpu0 = thread_cpu_time_s();
     let (mut laser, mut base, truth) = setup.build()?.split();
-    let mut on_scan = |scan: &scan_types::Scan, estimate: &Pose2| {
-        if let Some(v) = &live {
-            v.borrow_mut()
-                .scan(&geometry, scan, Some(*estimate), Some(truth.pose()));
-        }
+    let run = {
+        let mut on_scan = live_scan(&live, &geometry, || Some(truth.pose()));
+        let mut on_leg = live_leg(&live);
+        explore_loop(
+            &mut laser,
+            &mut base,
+            config,
+            params,
+            setup.start,
+            Some(&truth),
+            Some(&mut on_scan),
+            Some(&mut on_leg),
+        )?
     };
-    let mut on_leg = |leg: &navigator::Leg| {
-        if let Some(v) = &live {
-            v.borrow_mut().leg(leg);
-        }
-    };
-    let run = explore_loop(
-        &mut laser,
-        &mut base,
-        config,
-        params,
-        setup.start,
-        Some(&truth),
-        Some(&mut on_scan),
-        Some(&mut on_leg),
-    )?;
     let cpu = thread_cpu_time_s() - cpu0;
     if let Some(v) = live {
         v.into_inner().finish(Some(&run.exploration.outcome.grid));
@@ -388,29 +398,24 @@ fn explore_robot(
     tracing::info!(port, rays = geometry.ray_count, "sensor connected");
     let live: LiveCell = args
         .live
+        .live
         .start(config.localiser.map_resolution_m)?
         .map(std::cell::RefCell::new);
-    let mut on_scan = |scan: &scan_types::Scan, estimate: &Pose2| {
-        if let Some(v) = &live {
-            v.borrow_mut().scan(&geometry, scan, Some(*estimate), None);
-        }
-    };
-    let mut on_leg = |leg: &navigator::Leg| {
-        if let Some(v) = &live {
-            v.borrow_mut().leg(leg);
-        }
-    };
     let cpu0 = thread_cpu_time_s();
-    let run = explore_loop(
-        &mut laser,
-        &mut *base,
-        config,
-        params,
-        start,
-        None,
-        Some(&mut on_scan),
-        Some(&mut on_leg),
-    )?;
+    let run = {
+        let mut on_scan = live_scan(&live, &geometry, || None);
+        let mut on_leg = live_leg(&live);
+        explore_loop(
+            &mut laser,
+            &mut *base,
+            config,
+            params,
+            start,
+            None,
+            Some(&mut on_scan),
+            Some(&mut on_leg),
+        )?
+    };
     let cpu = thread_cpu_time_s() - cpu0;
     if let Some(v) = live {
         v.into_inner().finish(Some(&run.exploration.outcome.grid));
@@ -424,34 +429,6 @@ fn explore_robot(
         run,
         world: None,
     })
-}
-
-/// Writes the true world as a PNG at `cell_m` per pixel (obstacles black, free space white,
-/// north up), to put beside the explored `map.png`.
-fn write_truth_png(path: &std::path::Path, world: &World, cell_m: f64) -> anyhow::Result<()> {
-    let (lo, hi) = world.bounds();
-    let b = world.rasterise([lo.x_m(), lo.y_m()], [hi.x_m(), hi.y_m()], cell_m);
-    let mut pixels = vec![0u8; b.width * b.height];
-    for row in 0..b.height {
-        for col in 0..b.width {
-            let v = if b.occupied[row * b.width + col] {
-                0
-            } else {
-                254
-            };
-            pixels[(b.height - 1 - row) * b.width + col] = v;
-        }
-    }
-    let mut bytes = Vec::new();
-    image::codecs::png::PngEncoder::new(&mut bytes)
-        .write_image(
-            &pixels,
-            b.width as u32,
-            b.height as u32,
-            image::ExtendedColorType::L8,
-        )
-        .with_context(|| format!("encoding {}", path.display()))?;
-    write_atomic(path, &bytes)
 }
 
 fn pose_deg(p: &Pose2) -> [f64; 3] {

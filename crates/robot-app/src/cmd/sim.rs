@@ -67,13 +67,9 @@ pub struct SimArgs {
     /// Configuration, output folder, recording.
     #[command(flatten)]
     pub options: super::LoopOptions,
-    /// Live view.
+    /// Live view, paced by the simulated clock.
     #[command(flatten)]
-    pub live: crate::live::LiveOptions,
-    /// With --live: play the run at this many times the simulated clock's speed, so a viewer
-    /// can follow it (0: as fast as it computes).
-    #[arg(long, value_name = "RATE", default_value_t = 1.0, requires = "live", value_parser = super::non_negative)]
-    pub live_rate: f64,
+    pub live: crate::live::PacedLiveOptions,
 }
 
 /// Everything that defines one simulated run: the simulation, the target and the tuning.
@@ -315,7 +311,7 @@ pub fn run(args: SimArgs) -> anyhow::Result<()> {
     let mut live = args
         .live
         .start(spec.config.localiser.map_resolution_m)?
-        .map(|v| v.with_rate(args.live_rate).with_goal(goal));
+        .map(|v| v.with_goal(goal));
     let record = args
         .options
         .record
