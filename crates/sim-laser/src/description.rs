@@ -255,6 +255,12 @@ struct TomlBitmap {
     centre: [f64; 2],
     #[serde(default)]
     boundary: bool,
+    #[serde(default = "stage_dark_below")]
+    dark_below: u16,
+}
+
+fn stage_dark_below() -> u16 {
+    crate::stage::STAGE_DARK_BELOW
 }
 
 #[derive(Debug, Serialize, Deserialize)]
@@ -509,12 +515,22 @@ fn toml_bitmap(src: &TomlSource, file: &TomlWorld) -> Result<Option<Bitmap>, Sim
             "size must be > 0 and centre finite".into(),
         ));
     }
+    if !(1..=256).contains(&v.dark_below) {
+        return Err(src.err(
+            line,
+            "bitmap.dark_below",
+            format!(
+                "{} is out of range: a grey level 1..=256 (pixels darker than it are obstacles)",
+                v.dark_below
+            ),
+        ));
+    }
     let img_path = src.path.parent().unwrap_or(Path::new(".")).join(&v.image);
     let img = image::open(&img_path)
         .map_err(|e| src.err(line, "bitmap.image", format!("{}: {e}", img_path.display())))?
         .to_rgba8();
     Ok(Some(
-        bitmap_from_image(&img, v.size, v.centre, v.boundary)
+        bitmap_from_image(&img, v.size, v.centre, v.boundary, v.dark_below)
             .ok_or_else(|| src.err(line, "bitmap.image", "image is empty".into()))?,
     ))
 }

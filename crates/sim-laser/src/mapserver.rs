@@ -220,11 +220,17 @@ impl World {
                         message: e.to_string(),
                     })?
                     .to_rgba8();
-                let probe = crate::stage::bitmap_from_image(&img, [1.0, 1.0], [0.0, 0.0], false)
-                    .ok_or_else(|| SimError::Image {
-                        path: path.to_path_buf(),
-                        message: "image has no pixels".into(),
-                    })?;
+                let probe = crate::stage::bitmap_from_image(
+                    &img,
+                    [1.0, 1.0],
+                    [0.0, 0.0],
+                    false,
+                    crate::stage::STAGE_DARK_BELOW,
+                )
+                .ok_or_else(|| SimError::Image {
+                    path: path.to_path_buf(),
+                    message: "image has no pixels".into(),
+                })?;
                 let size = [probe.width as f64 * 0.02, probe.height as f64 * 0.02];
                 crate::stage_world_from_bytes(
                     &bytes,

@@ -9,24 +9,29 @@ use crate::{SimError, World};
 /// The paper's world: Stage's cave.png (GPL-2.0, from rtv/Stage; see `sim/README.md`).
 static CAVE_PNG: &[u8] = include_bytes!("../../../sim/cave.png");
 
-/// True for a pixel Stage treats as an obstacle: dark (mean of RGB below 128) and not transparent.
-fn is_dark(p: &image::Rgba<u8>) -> bool {
+/// Stage's threshold: a pixel whose mean grey is below it is an obstacle.
+pub const STAGE_DARK_BELOW: u16 = 128;
+
+/// True for an obstacle pixel: mean of RGB below `dark_below` (Stage: 128) and not transparent.
+fn is_dark(p: &image::Rgba<u8>, dark_below: u16) -> bool {
     let [r, g, b, a] = p.0;
-    a >= 128 && (r as u32 + g as u32 + b as u32) < 3 * 128
+    a >= 128 && (r as u32 + g as u32 + b as u32) < 3 * dark_below as u32
 }
 
 /// Turns a decoded image into a bitmap: dark-pixel bounding box scaled to `size_m`, centred on
-/// `centre`; with `boundary`, the outermost ring of cells is made solid.
+/// `centre`; with `boundary`, the outermost ring of cells is made solid. A pixel whose mean grey
+/// is below `dark_below` is dark.
 pub(crate) fn bitmap_from_image(
     img: &image::RgbaImage,
     size_m: [f64; 2],
     centre: [f64; 2],
     boundary: bool,
+    dark_below: u16,
 ) -> Option<Bitmap> {
     let (w, h) = img.dimensions();
     let (mut c0, mut c1, mut r0, mut r1) = (u32::MAX, 0u32, u32::MAX, 0u32);
     for (x, y, p) in img.enumerate_pixels() {
-        if is_dark(p) {
+        if is_dark(p, dark_below) {
             c0 = c0.min(x);
             c1 = c1.max(x);
             r0 = r0.min(y);
@@ -46,7 +51,7 @@ pub(crate) fn bitmap_from_image(
         for col in 0..bw {
             let x = c0 + col as u32;
             let on_ring = boundary && (row == 0 || col == 0 || row + 1 == bh || col + 1 == bw);
-            occupied[row * bw + col] = on_ring || is_dark(img.get_pixel(x, y));
+            occupied[row * bw + col] = on_ring || is_dark(img.get_pixel(x, y), dark_below);
         }
     }
     Some(Bitmap {
@@ -89,9 +94,11 @@ pub fn stage_world_from_bytes(
         })?
         .to_rgba8();
     let bitmap =
-        bitmap_from_image(&img, size_m, centre, boundary).ok_or_else(|| SimError::Image {
-            path: path.to_path_buf(),
-            message: "image has no pixels".into(),
+        bitmap_from_image(&img, size_m, centre, boundary, STAGE_DARK_BELOW).ok_or_else(|| {
+            SimError::Image {
+                path: path.to_path_buf(),
+                message: "image has no pixels".into(),
+            }
         })?;
     World::from_parts(WorldParts {
         name: name.to_string(),

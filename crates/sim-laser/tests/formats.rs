@@ -239,6 +239,39 @@ fn map_server_by_hand() {
 }
 
 #[test]
+fn bitmap_dark_below_by_hand() {
+    // A 5 x 1 grey image, one metre per pixel from x = 0: black, white, grey 128, white, black.
+    let dir = tempfile::tempdir().unwrap();
+    let mut pgm = b"P5\n5 1\n255\n".to_vec();
+    pgm.extend_from_slice(&[0, 255, 128, 255, 0]);
+    std::fs::write(dir.path().join("g.pgm"), &pgm).unwrap();
+    let toml = dir.path().join("g.toml");
+    let world = |extra: &str| {
+        std::fs::write(
+            &toml,
+            format!("[bitmap]\nimage = \"g.pgm\"\nsize = [5.0, 1.0]\ncentre = [2.5, 0.5]\n{extra}"),
+        )
+        .unwrap();
+        World::load(&toml)
+    };
+    // Stage's threshold (below 128): grey 128 is free, the ray from x = 1.5 meets x = 4.
+    let w = world("").unwrap();
+    assert!((w.raycast(p(1.5, 0.5), 0.0, 10.0).unwrap() - 2.5).abs() < 1e-12);
+    // Below 129 or 255, the grey pixel is a wall at x = 2.
+    for t in [129, 255] {
+        let w = world(&format!("dark_below = {t}\n")).unwrap();
+        assert!((w.raycast(p(1.5, 0.5), 0.0, 10.0).unwrap() - 0.5).abs() < 1e-12);
+    }
+    // Out of range: the error names the file, the line of [bitmap] and the key.
+    for t in [0, 300] {
+        let e = world(&format!("dark_below = {t}\n"))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("g.toml:1: bitmap.dark_below"), "{e}");
+    }
+}
+
+#[test]
 #[allow(clippy::print_stdout)]
 fn nav2_maps_load() {
     let dir = Path::new(concat!(

@@ -37,7 +37,8 @@ pub struct ExploreArgs {
     /// Most legs toward one frontier before it is given up.
     #[arg(long, default_value_t = ExploreParams::default().legs_per_goal)]
     pub legs_per_goal: usize,
-    /// Configuration and output folder (`--record` is not taken here).
+    /// Configuration, output folder and recording (`--record`: every scan with its estimated
+    /// and, in the simulator, true pose; the map at the end in the ros2 profile).
     #[command(flatten)]
     pub options: super::LoopOptions,
     /// Live view, paced by the simulated clock (`--live-rate` applies in the simulator).
@@ -147,13 +148,12 @@ struct Explored {
     summary: ExploreSummary,
     run: crate::runloop::ExploreRun,
     world: Option<(std::sync::Arc<World>, String)>,
+    /// How `--record` ended (reported once the other outputs are written).
+    recorded: anyhow::Result<()>,
 }
 
 /// Runs `robot-app explore`: in the simulator, or with `--port` on a real Hokuyo and base.
 pub fn run(args: ExploreArgs) -> anyhow::Result<()> {
-    if args.options.record.is_some() {
-        bail!("--record: not supported by explore yet");
-    }
     let params = ExploreParams {
         max_goals: args.max_goals,
         legs_per_goal: args.legs_per_goal,
@@ -198,6 +198,7 @@ pub fn run(args: ExploreArgs) -> anyhow::Result<()> {
             args.options.out.display()
         );
     }
+    explored.recorded?;
     if summary.reason == Reason::Interrupted {
         return Err(crate::interrupt::Interrupted.into());
     }
@@ -273,6 +274,67 @@ fn summary_of(
     }
 }
 
+/// The recording of `--record`, if asked for, and the first error writing it.
+struct Recording {
+    recorder: Option<(crate::record::Recorder, std::path::PathBuf)>,
+    error: Option<String>,
+}
+
+impl Recording {
+    /// Opens `--record`'s file in its profile, if given.
+    fn open(
+        options: &super::LoopOptions,
+        geometry: &scan_types::ScanGeometry,
+    ) -> anyhow::Result<Self> {
+        let recorder = options
+            .record
+            .as_deref()
+            .map(|p| {
+                crate::record::Recorder::create_profile(p, geometry, options.profile)
+                    .map(|r| (r, p.to_path_buf()))
+                    .with_context(|| format!("cannot record to {}", p.display()))
+            })
+            .transpose()?;
+        Ok(Recording {
+            recorder,
+            error: None,
+        })
+    }
+
+    /// Records one scan; after the first error, records nothing more.
+    fn scan(
+        &mut self,
+        geometry: &scan_types::ScanGeometry,
+        scan: &scan_types::Scan,
+        truth: Option<Pose2>,
+        estimate: Pose2,
+    ) {
+        if let Some((r, path)) = self.recorder.as_mut()
+            && self.error.is_none()
+            && let Err(e) = r.record_scan(geometry, scan, truth, Some(estimate))
+        {
+            self.error = Some(format!("recording to {}: {e}", path.display()));
+        }
+    }
+
+    /// Adds the legs and the map, and closes the file; the first error, if any.
+    fn finish(self, run: &crate::runloop::ExploreRun) -> anyhow::Result<()> {
+        let Some((mut r, path)) = self.recorder else {
+            return Ok(());
+        };
+        if let Some(e) = self.error {
+            // Close what was written; the error is what the user needs to see.
+            let _ = r.finish();
+            bail!(e);
+        }
+        let outcome = &run.exploration.outcome;
+        r.write_legs(&run.log, &outcome.reason.to_string())
+            .and_then(|()| r.write_map(&outcome.grid))
+            .and_then(|()| r.finish().map(|_| ()))
+            .with_context(|| format!("finishing the recording {}", path.display()))
+    }
+}
+
 /// The live view, when `--live` is given, shared by the scan and leg hooks.
 type LiveCell = Option<std::cell::RefCell<crate::live::LiveView>>;
 
@@ -333,10 +395,15 @@ fn explore_sim(
         .start(config.localiser.map_resolution_m)?
         .map(std::cell::RefCell::new);
     let geometry = setup.sensor.geometry();
+    let mut recording = Recording::open(&args.options, &geometry)?;
     let cpu0 = thread_cpu_time_s();
     let (mut laser, mut base, truth) = setup.build()?.split();
     let run = {
-        let mut on_scan = live_scan(&live, &geometry, || Some(truth.pose()));
+        let mut show = live_scan(&live, &geometry, || Some(truth.pose()));
+        let mut on_scan = |scan: &scan_types::Scan, estimate: &Pose2| {
+            recording.scan(&geometry, scan, Some(truth.pose()), *estimate);
+            show(scan, estimate);
+        };
         let mut on_leg = live_leg(&live);
         explore_loop(
             &mut laser,
@@ -353,6 +420,7 @@ fn explore_sim(
     if let Some(v) = live {
         v.into_inner().finish(Some(&run.exploration.outcome.grid));
     }
+    let recorded = recording.finish(&run);
     let quality = map_quality(
         &setup.world,
         setup.robot_radius_m,
@@ -376,6 +444,7 @@ fn explore_sim(
         summary,
         run,
         world: Some((setup.world.clone(), setup.world_name.clone())),
+        recorded,
     })
 }
 
@@ -401,9 +470,14 @@ fn explore_robot(
         .live
         .start(config.localiser.map_resolution_m)?
         .map(std::cell::RefCell::new);
+    let mut recording = Recording::open(&args.options, &geometry)?;
     let cpu0 = thread_cpu_time_s();
     let run = {
-        let mut on_scan = live_scan(&live, &geometry, || None);
+        let mut show = live_scan(&live, &geometry, || None);
+        let mut on_scan = |scan: &scan_types::Scan, estimate: &Pose2| {
+            recording.scan(&geometry, scan, None, *estimate);
+            show(scan, estimate);
+        };
         let mut on_leg = live_leg(&live);
         explore_loop(
             &mut laser,
@@ -423,11 +497,13 @@ fn explore_robot(
     if let Some(urg) = laser.urg_mut() {
         let _ = urg.stop();
     }
+    let recorded = recording.finish(&run);
     let summary = summary_of(&run, config, (start, None), None, (None, None), cpu);
     Ok(Explored {
         summary,
         run,
         world: None,
+        recorded,
     })
 }
 
