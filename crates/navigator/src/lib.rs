@@ -29,6 +29,7 @@ mod explore;
 mod machine;
 mod outcome;
 mod params;
+mod revisit;
 mod run;
 
 pub use error::NavigatorError;

@@ -13,6 +13,7 @@ use crate::MAX_COORD_M;
 const STALL_JUDGED_M: f64 = 0.2;
 use crate::clearance::{block_by_unseen_hits, denoised, erode};
 use crate::drive::{Drive, LegKind};
+use crate::revisit::Revisits;
 use crate::{HeadingRule, Leg, NarrowPassage, NavigatorError, Outcome, Params, PlanRule, Reason};
 
 /// What the navigator asks its driver to do next.
@@ -149,6 +150,8 @@ pub struct Navigator {
     sigma_heading_rad: f64,
     /// The estimate's position uncertainty (one standard deviation), metres.
     sigma_position_m: f64,
+    /// Leg ends kept for `[localiser] revisit`.
+    revisits: Revisits,
 }
 
 impl Navigator {
@@ -223,6 +226,7 @@ impl Navigator {
             slam_leg_pose: None,
             sigma_heading_rad: 0.0,
             sigma_position_m: 0.0,
+            revisits: Revisits::default(),
         })
     }
 
@@ -312,6 +316,11 @@ impl Navigator {
                 // After a retarget the last leg's end is already recorded.
                 if self.legs_log.is_empty() {
                     self.record(None, None, &scan);
+                    if self.params.localiser.revisit {
+                        // The start: the one place known exactly.
+                        let sigma = (self.sigma_position_m, self.sigma_heading_rad);
+                        self.revisits.add(0, self.estimate, &scan, sigma);
+                    }
                 }
                 self.plan_next(scan)
             }
@@ -837,6 +846,9 @@ impl Navigator {
         };
         self.sigma_position_m =
             self.sigma_position_m.hypot(share * driven) + driven * self.sigma_heading_rad;
+        if self.params.localiser.revisit && drive.commanded_m > 0.0 {
+            self.revisit(&drive.last_scan);
+        }
         let judged = (drive.laser_measured, drive.commanded_m);
         let scan = drive.last_scan;
         self.integrate(&scan);
@@ -865,6 +877,26 @@ impl Navigator {
             self.failures = 0;
         }
         self.plan_next(scan)
+    }
+
+    /// `[localiser] revisit`: corrects the estimate by the earlier leg ends near it, and keeps
+    /// this one.
+    fn revisit(&mut self, scan: &Scan) {
+        let sigma = (self.sigma_position_m, self.sigma_heading_rad);
+        if let Some(c) = self.revisits.correct(
+            &self.params.localiser,
+            &self.geometry,
+            self.legs,
+            scan,
+            self.estimate,
+            sigma,
+        ) {
+            self.estimate = c.pose;
+            self.sigma_position_m = c.sigma_m;
+            self.sigma_heading_rad = c.sigma_heading_rad;
+        }
+        let sigma = (self.sigma_position_m, self.sigma_heading_rad);
+        self.revisits.add(self.legs, self.estimate, scan, sigma);
     }
 
     /// Places `scan` by the online SLAM with the search centred on `prediction`; the placed

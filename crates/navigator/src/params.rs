@@ -229,6 +229,42 @@ pub struct LocaliserParams {
     /// lets the scan slide).
     #[serde(default = "default_slam_max_sigma_m")]
     pub slam_max_sigma_m: f64,
+    /// Revisits: at each leg's end the scan is also matched against the leg-end scans of
+    /// earlier legs taken near the estimate, and a good match pulls the estimate back to
+    /// them (a place seen again corrects the drift since). Absent from a stored configuration,
+    /// it is off (as the runs recorded before it).
+    #[serde(default)]
+    pub revisit: bool,
+    /// Earlier leg ends within this distance of the estimate are matched, metres.
+    #[serde(default = "default_revisit_radius_m")]
+    pub revisit_radius_m: f64,
+    /// Only leg ends at least this many legs old are matched (the recent ones are what the
+    /// estimate was chained from).
+    #[serde(default = "default_revisit_min_age_legs")]
+    pub revisit_min_age_legs: usize,
+    /// Most earlier leg ends matched at once (the nearest).
+    #[serde(default = "default_revisit_keyframes")]
+    pub revisit_keyframes: usize,
+    /// A revisit match is taken only when its data pin the position this well in the worst
+    /// direction, metres (one standard deviation, without the prior).
+    #[serde(default = "default_revisit_max_sigma_m")]
+    pub revisit_max_sigma_m: f64,
+}
+
+fn default_revisit_radius_m() -> f64 {
+    1.5
+}
+
+fn default_revisit_min_age_legs() -> usize {
+    5
+}
+
+fn default_revisit_keyframes() -> usize {
+    4
+}
+
+fn default_revisit_max_sigma_m() -> f64 {
+    0.02
 }
 
 fn default_slam_max_sigma_m() -> f64 {
@@ -458,6 +494,11 @@ impl Params {
                 slam_resolution_m: default_slam_resolution_m(),
                 slam_refined_only: true,
                 slam_max_sigma_m: default_slam_max_sigma_m(),
+                revisit: true,
+                revisit_radius_m: default_revisit_radius_m(),
+                revisit_min_age_legs: default_revisit_min_age_legs(),
+                revisit_keyframes: default_revisit_keyframes(),
+                revisit_max_sigma_m: default_revisit_max_sigma_m(),
                 slam_smoothing_m: default_slam_smoothing_m(),
                 turn_sigma_deg: default_turn_sigma_deg(),
                 measured_turn_sigma_deg: default_measured_turn_sigma_deg(),
@@ -498,6 +539,7 @@ impl Params {
         c.tracking.gate_m = 0.2;
         c.localiser.heading_rule = HeadingRule::Commanded;
         c.localiser.travel_rule = TravelRule::Landmark;
+        c.localiser.revisit = false;
         c
     }
 
@@ -589,6 +631,10 @@ impl Params {
             ("localiser.slam_resolution_m", z.slam_resolution_m, 0.01, 1.0, false),
             ("localiser.slam_max_sigma_m", z.slam_max_sigma_m, 0.0, 10.0, true),
             ("localiser.slam_smoothing_m", z.slam_smoothing_m, 0.0, 1.0, true),
+            ("localiser.revisit_radius_m", z.revisit_radius_m, 0.0, 100.0, true),
+            ("localiser.revisit_min_age_legs", count(z.revisit_min_age_legs), 1.0, 1e6, false),
+            ("localiser.revisit_keyframes", count(z.revisit_keyframes), 1.0, 100.0, false),
+            ("localiser.revisit_max_sigma_m", z.revisit_max_sigma_m, 0.0, 10.0, true),
             ("localiser.turn_sigma_deg", z.turn_sigma_deg, 0.0, 90.0, false),
             ("localiser.measured_turn_sigma_deg", z.measured_turn_sigma_deg, 0.0, 90.0, false),
             ("localiser.drive_sigma_share", z.drive_sigma_share, 0.0, 1.0, false),
