@@ -696,7 +696,9 @@ pub(crate) fn scan_mcap(bytes: &[u8], path: &Path) -> Found {
         };
         found.laser_topic(topic).entries.push(decoded);
     }
-    if found.tail.is_empty() && !bytes.ends_with(mcap::MAGIC) {
+    // The file starts and ends with the magic: a file of the opening magic alone is cut too.
+    let complete = bytes.len() >= 2 * mcap::MAGIC.len() && bytes.ends_with(mcap::MAGIC);
+    if found.tail.is_empty() && !complete {
         let scans: usize = found
             .laser
             .iter()
