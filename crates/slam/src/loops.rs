@@ -72,10 +72,10 @@ impl Default for LoopParams {
             odometry_sigma_m: 0.005,
             odometry_sigma_per_m: 0.015,
             odometry_sigma_deg: 0.1,
-            odometry_sigma_deg_per_m: 0.5,
+            odometry_sigma_deg_per_m: 0.6,
             odometry_sigma_per_rad: 0.02,
             reoptimise_sigmas: 3.0,
-            closure_sigma_m: 0.08,
+            closure_sigma_m: 0.09,
             closure_sigma_deg: 0.7,
             cauchy_scale: 1.0,
             reject_weight: 0.3,
@@ -403,11 +403,11 @@ mod tests {
     #[test]
     fn a_closure_of_near_hits_gets_a_looser_heading() {
         let params = LoopParams::default();
-        // Hits 4 m away: 0.08 m / 4 m = 0.02 rad, above the 0.7 deg floor.
+        // Hits 4 m away: 0.09 m / 4 m = 0.0225 rad, above the 0.7 deg (0.0122 rad) floor.
         let near = [[4.0, 0.0], [0.0, 4.0], [-4.0, 0.0]];
         let s = closure_heading_sigma(&near, &params);
-        assert!((s - 0.02).abs() < 1e-12, "{s}");
-        // Hits 20 m away: 0.004 rad would be below the floor, so the floor holds.
+        assert!((s - 0.0225).abs() < 1e-12, "{s}");
+        // Hits 20 m away: 0.0045 rad would be below the floor, so the floor holds.
         let far = [[20.0, 0.0], [0.0, -20.0]];
         let s = closure_heading_sigma(&far, &params);
         assert!((s - 0.7f64.to_radians()).abs() < 1e-12, "{s}");
