@@ -37,8 +37,11 @@ pub struct LoopParams {
     pub odometry_sigma_m: f64,
     /// ... (share of the step's length) ...
     pub odometry_sigma_per_m: f64,
-    /// ... and of its heading, degrees, plus `odometry_sigma_per_rad` of its turn.
+    /// ... and of its heading, degrees, plus `odometry_sigma_deg_per_m` per metre of the step
+    /// and `odometry_sigma_per_rad` of its turn.
     pub odometry_sigma_deg: f64,
+    /// Degrees added to a step's heading standard deviation per metre of the step.
+    pub odometry_sigma_deg_per_m: f64,
     /// Share of the step's turn added to its heading's standard deviation.
     pub odometry_sigma_per_rad: f64,
     /// The graph is optimised as closures come when one of them is this many standard
@@ -46,7 +49,8 @@ pub struct LoopParams {
     pub reoptimise_sigmas: f64,
     /// Standard deviation of a closure along x and y, metres ...
     pub closure_sigma_m: f64,
-    /// ... and of its heading, degrees.
+    /// ... and of its heading, degrees, at least (more when the scan's hits are near: see
+    /// [`close_loops`]).
     pub closure_sigma_deg: f64,
     /// Scale of the Cauchy loss of closures, in standard deviations.
     pub cauchy_scale: f64,
@@ -65,13 +69,14 @@ impl Default for LoopParams {
             linear_window_m: 1.5,
             angular_window_deg: 25.0,
             min_quality: 0.6,
-            odometry_sigma_m: 0.01,
-            odometry_sigma_per_m: 0.02,
-            odometry_sigma_deg: 0.2,
+            odometry_sigma_m: 0.005,
+            odometry_sigma_per_m: 0.015,
+            odometry_sigma_deg: 0.1,
+            odometry_sigma_deg_per_m: 0.6,
             odometry_sigma_per_rad: 0.02,
             reoptimise_sigmas: 3.0,
-            closure_sigma_m: 0.1,
-            closure_sigma_deg: 2.0,
+            closure_sigma_m: 0.09,
+            closure_sigma_deg: 0.7,
             cauchy_scale: 1.0,
             reject_weight: 0.3,
         }
@@ -98,6 +103,7 @@ impl LoopParams {
             &[
                 ("odometry_sigma_per_m", self.odometry_sigma_per_m),
                 ("odometry_sigma_per_rad", self.odometry_sigma_per_rad),
+                ("odometry_sigma_deg_per_m", self.odometry_sigma_deg_per_m),
                 ("linear_window_m", self.linear_window_m),
                 ("angular_window_deg", self.angular_window_deg),
             ],
@@ -157,7 +163,9 @@ pub struct Closure {
 /// closure, and what closure found.
 ///
 /// Every `every`-th scan is a node of the graph; consecutive nodes are joined by the front
-/// end's relative pose, and the scans between them follow their node rigidly.
+/// end's relative pose, and the scans between them follow their node rigidly. A closure's
+/// heading standard deviation is `closure_sigma_m` over the RMS range of the scan's hits, and
+/// at least `closure_sigma_deg`.
 pub fn close_loops(
     geometry: &ScanGeometry,
     scans: &[&Scan],
@@ -198,6 +206,7 @@ pub fn close_loops(
         let along = params.odometry_sigma_m * (every as f64).sqrt()
             + params.odometry_sigma_per_m * step.x_m.hypot(step.y_m);
         let turn = params.odometry_sigma_deg.to_radians() * (every as f64).sqrt()
+            + params.odometry_sigma_deg_per_m.to_radians() * step.x_m.hypot(step.y_m)
             + params.odometry_sigma_per_rad * step.theta_rad.abs();
         graph.add_edge(Edge {
             from: m - 1,
@@ -238,7 +247,7 @@ pub fn close_loops(
                 sigma: [
                     params.closure_sigma_m,
                     params.closure_sigma_m,
-                    params.closure_sigma_deg.to_radians(),
+                    closure_heading_sigma(&points[i], params),
                 ],
                 robust: true,
             };
@@ -277,6 +286,27 @@ pub fn close_loops(
         .map(|s| graph.nodes[s / every].compose(&relative[s]))
         .collect();
     Ok((corrected, report))
+}
+
+/// A closure's heading standard deviation: `closure_sigma_m` over the RMS range of the scan's
+/// hits (a position error of that size at range r turns the scan by about that much), and at
+/// least `closure_sigma_deg`.
+fn closure_heading_sigma(points: &[[f64; 2]], params: &LoopParams) -> f64 {
+    let floor = params.closure_sigma_deg.to_radians();
+    if points.is_empty() {
+        return floor;
+    }
+    let mean_square = points
+        .iter()
+        .map(|p| p[0] * p[0] + p[1] * p[1])
+        .sum::<f64>()
+        / points.len() as f64;
+    let rms = mean_square.sqrt();
+    if rms > 0.0 {
+        floor.max(params.closure_sigma_m / rms)
+    } else {
+        floor
+    }
 }
 
 /// The nearest earlier nodes to node `m` (of `every` scans each) within the search radius, at
@@ -364,4 +394,23 @@ fn match_submap(
     };
     tracing::debug!(j, i, quality = found.quality, "loop closure");
     Some((pose, found.quality))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_closure_of_near_hits_gets_a_looser_heading() {
+        let params = LoopParams::default();
+        // Hits 4 m away: 0.09 m / 4 m = 0.0225 rad, above the 0.7 deg (0.0122 rad) floor.
+        let near = [[4.0, 0.0], [0.0, 4.0], [-4.0, 0.0]];
+        let s = closure_heading_sigma(&near, &params);
+        assert!((s - 0.0225).abs() < 1e-12, "{s}");
+        // Hits 20 m away: 0.0045 rad would be below the floor, so the floor holds.
+        let far = [[20.0, 0.0], [0.0, -20.0]];
+        let s = closure_heading_sigma(&far, &params);
+        assert!((s - 0.7f64.to_radians()).abs() < 1e-12, "{s}");
+        assert!((closure_heading_sigma(&[], &params) - 0.7f64.to_radians()).abs() < 1e-12);
+    }
 }
