@@ -71,7 +71,7 @@ fn aces_and_breezyslam_every_scan_placed() {
             "{rel}: {} of {} placed; consistency {:.3}; start to end {:.2} m; eval {:?}",
             r.placed,
             r.scans,
-            r.map_consistency,
+            r.map_consistency_share,
             r.start_to_end_m,
             r.evaluation.as_ref().map(|e| (
                 e.relative_1.translation_m.mean,
@@ -256,8 +256,8 @@ fn loop_closure_corrects_the_intel_drift() {
         "intel: ATE {:.3} m with loop closure, {:.3} m without; consistency {:.3} / {:.3}; {} closures accepted, {} rejected",
         ate(&closed),
         ate(&alone),
-        closed.report.map_consistency,
-        alone.report.map_consistency,
+        closed.report.map_consistency_share,
+        alone.report.map_consistency_share,
         l.accepted,
         l.rejected
     );
@@ -269,7 +269,7 @@ fn loop_closure_corrects_the_intel_drift() {
         ate(&closed),
         ate(&alone)
     );
-    assert!(closed.report.map_consistency > alone.report.map_consistency);
+    assert!(closed.report.map_consistency_share > alone.report.map_consistency_share);
 }
 
 /// The bar for false closures on the ACES log: every accepted closure's measured

@@ -160,13 +160,13 @@ fn foxglove_fields_are_there() {
     let v: serde_json::Value = serde_json::from_slice(&msgs[0].data).unwrap();
     assert_eq!(v["timestamp"]["sec"], 12);
     assert_eq!(v["timestamp"]["nsec"], 250_000_000);
-    assert_eq!(v["frame_id"], "world");
+    assert_eq!(v["frame_id"], "map");
     assert_eq!(v["start_angle"], -0.5);
     assert_eq!(v["end_angle"], 0.5);
     assert_eq!(v["ranges"], serde_json::json!([1.5, 4.0, 0.0]));
     assert_eq!(v["pose"]["position"]["x"], 1.0);
     assert!((v["pose"]["orientation"]["z"].as_f64().unwrap() - 0.25f64.sin()).abs() < 1e-15);
-    assert_eq!(msgs[1].channel.topic, "/pose/estimated");
+    assert_eq!(msgs[1].channel.topic, "/pose_estimate");
 }
 
 #[test]
