@@ -681,7 +681,8 @@ pub(crate) fn scan_mcap(bytes: &[u8], path: &Path) -> Found {
             Some(Kind::Protobuf) => foreign::decode_foxglove_protobuf(&msg.data)
                 .map(Decoded::Foreign)
                 .map_err(|m| bad(format!("not a protobuf {FOXGLOVE_LASER_SCAN}: {m}"))),
-            None if pose_topic(topic).is_some() => {
+            // goalseek's JSON poses; a ROS 2 recording's CDR poses on the same topics are not.
+            None if msg.channel.message_encoding == "json" && pose_topic(topic).is_some() => {
                 let pose: PoseMsg = match serde_json::from_slice(&msg.data) {
                     Ok(p) => p,
                     Err(e) => {

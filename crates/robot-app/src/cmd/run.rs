@@ -56,12 +56,16 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
     let mut laser = super::open_sensor(&args.port, urg_driver::UrgConfig::default())?;
     tracing::info!(port = %args.port, rays = laser.geometry().ray_count, "sensor connected");
     let geometry = *laser.geometry();
+    let scan_period_s = laser
+        .urg_mut()
+        .map(|u| u.params().scan_period().as_secs_f64());
     let mut recorder = args
         .options
         .record
         .as_deref()
         .map(|p| {
             crate::record::Recorder::create_profile(p, &geometry, args.options.profile)
+                .map(|r| r.with_scan_period(scan_period_s))
                 .with_context(|| format!("cannot record to {}", p.display()))
         })
         .transpose()?;

@@ -398,7 +398,8 @@ pub fn run_with(
     let setup = &spec.setup;
     let geometry = setup.sensor.geometry();
     let mut recorder = crate::record::Recorder::create_profile(path, &geometry, profile)
-        .with_context(|| format!("cannot record to {}", path.display()))?;
+        .with_context(|| format!("cannot record to {}", path.display()))?
+        .with_scan_period(Some(setup.sensor.scan_period_s()));
     let settings = crate::record::RunSettings {
         start: setup.start,
         goal: spec.goal,
