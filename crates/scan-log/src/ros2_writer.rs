@@ -304,7 +304,8 @@ fn occupancy_grid_cdr(map: &Ros2Map, stamp: Stamp) -> Vec<u8> {
 }
 
 /// Writes a recording ROS 2 tools open (MCAP, profile `ros2`), atomically as
-/// [`crate::McapRecorder`] does: `/scan`, the estimated and true poses, `/tf` and `/map`.
+/// [`crate::McapRecorder`] does: `/scan`, the estimated and true poses, `/tf`, `/tf_static`
+/// and `/map`.
 ///
 /// Every scan ends an MCAP chunk, so a cut `<path>.partial` keeps the scans before the cut;
 /// dropping the recorder without `finish` finishes it.
