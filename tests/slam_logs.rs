@@ -101,6 +101,32 @@ fn aces_and_breezyslam_every_scan_placed() {
         ] {
             assert!(dir.path().join(f).exists(), "{rel}: {f}");
         }
+        // slam.json names the path it measures and its units; a closure's measured pose is
+        // `{x_m, y_m, heading_deg}`.
+        let text = std::fs::read_to_string(dir.path().join("slam.json")).unwrap();
+        let v: serde_json::Value = serde_json::from_str(&text).unwrap();
+        let close = |a: &serde_json::Value, b: f64| (a.as_f64().unwrap() - b).abs() <= 1e-12;
+        assert!(
+            close(&v["estimated_path_length_m"], r.estimated_path_length_m),
+            "{rel}"
+        );
+        assert!(
+            close(&v["map_consistency_share"], r.map_consistency_share),
+            "{rel}"
+        );
+        if let Some(l) = &r.loop_closure {
+            let closures = v["loop_closure"]["closures"].as_array().unwrap();
+            assert_eq!(closures.len(), l.closures.len(), "{rel}");
+            for (j, c) in closures.iter().zip(&l.closures) {
+                let m = &j["measured"];
+                assert!(close(&m["x_m"], c.measured[0]), "{rel}: {j}");
+                assert!(close(&m["y_m"], c.measured[1]), "{rel}: {j}");
+                assert!(
+                    close(&m["heading_deg"], c.measured[2].to_degrees()),
+                    "{rel}: {j}"
+                );
+            }
+        }
     }
 }
 
