@@ -70,7 +70,7 @@ fn check_summary_fields(s: &serde_json::Value) {
         assert!(s[key].is_u64(), "{key}: {s}");
     }
     for key in [
-        "path_length_m",
+        "commanded_path_length_m",
         "final_position_error_m",
         "final_heading_error_deg",
         "ate_rmse_m",
@@ -121,7 +121,7 @@ fn paper_scenario_reaches_the_target_and_writes_every_output() {
     // increasing; the drives alone take their length over the simulator's 0.3 m/s.
     assert!(truth.iter().zip(&est).all(|(t, e)| t[0] == e[0]));
     assert!(est.windows(2).all(|w| w[1][0] > w[0][0]), "{est:?}");
-    let drive_s = s["path_length_m"].as_f64().unwrap() / 0.3;
+    let drive_s = s["commanded_path_length_m"].as_f64().unwrap() / 0.3;
     assert!(
         est[legs][0] >= 0.95 * drive_s,
         "{} s < {drive_s} s",
@@ -140,7 +140,7 @@ fn paper_scenario_reaches_the_target_and_writes_every_output() {
 
     // The robot drove at least the straight distance it covered (2 % drive noise aside).
     let covered = (last[1] - START.0).hypot(last[2] - START.1);
-    assert!(s["path_length_m"].as_f64().unwrap() >= 0.95 * covered);
+    assert!(s["commanded_path_length_m"].as_f64().unwrap() >= 0.95 * covered);
 
     check_trajectory_csv(d, &truth, legs);
     check_maps_and_figure(d);
@@ -223,7 +223,7 @@ fn a_run_stopped_by_the_leg_limit_leaves_its_summary() {
     assert!(!s["note"].as_str().unwrap().is_empty());
     // The paper's start is 11.44 m from the target; the robot truly moved at most the
     // commanded distance plus the 2 % drive-scale noise (5 % allowed).
-    let driven = s["path_length_m"].as_f64().unwrap();
+    let driven = s["commanded_path_length_m"].as_f64().unwrap();
     assert!(s["goal_distance_m"].as_f64().unwrap() >= 11.44 - 1.05 * driven - 0.01);
     assert_eq!(tum_rows(&read(&out, "truth.tum")).len(), 2);
     assert!(read(&out, "config.toml").contains("max_legs = 1"));
@@ -283,8 +283,8 @@ fn a_run_through_a_narrow_door_lists_it_in_its_summary() {
     // The door spans x in 2.4 +- 0.37 in the wall at y = 0 (0.1 m thick).
     let door: Vec<_> = passages
         .iter()
-        .filter(|p| (p["at"][0].as_f64().unwrap() - 2.4).abs() < 0.37)
-        .filter(|p| p["at"][1].as_f64().unwrap().abs() < 0.2)
+        .filter(|p| (p["at"]["x_m"].as_f64().unwrap() - 2.4).abs() < 0.37)
+        .filter(|p| p["at"]["y_m"].as_f64().unwrap().abs() < 0.2)
         .collect();
     assert!(!door.is_empty(), "{s}");
     for p in door {

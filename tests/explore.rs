@@ -7,6 +7,9 @@ use std::ffi::OsStr;
 use std::path::Path;
 
 use clap::Parser;
+
+#[path = "../crates/robot-app/tests/common/key_units.rs"]
+mod key_units;
 use localiser::OccupancyGrid;
 use robot_app::cmd::explore::{ExploreArgs, map_quality};
 use scan_types::{Pose2, Scan, ScanGeometry, WorldPoint};
@@ -97,8 +100,14 @@ fn the_paper_world_is_explored_without_a_goal() {
     println!("{s}");
     assert_eq!(s["end"], "explored", "{s}");
     assert_eq!(s["collisions"], 0, "{s}");
-    assert!(s["coverage"].as_f64().unwrap() >= 0.95, "{s}");
-    assert!(s["map_accuracy"].as_f64().unwrap() >= 0.98, "{s}");
+    // Every key names its unit or is a documented unitless one.
+    assert_eq!(
+        key_units::keys_without_unit(&s),
+        Vec::<String>::new(),
+        "{s}"
+    );
+    assert!(s["coverage_share"].as_f64().unwrap() >= 0.95, "{s}");
+    assert!(s["map_accuracy_share"].as_f64().unwrap() >= 0.98, "{s}");
     // Every frontier tried is listed with how it ended, and the legs add up.
     let goals = s["goals"].as_array().unwrap();
     assert_eq!(goals.len() as u64, s["goals_tried"].as_u64().unwrap());
@@ -156,10 +165,10 @@ fn revisits_keep_the_map_of_simple_rooms_accurate() {
     println!("without: {without}\nwith: {with}");
     for s in [&without, &with] {
         assert_eq!(s["collisions"], 0, "{s}");
-        assert!(s["coverage"].as_f64().unwrap() >= 0.95, "{s}");
+        assert!(s["coverage_share"].as_f64().unwrap() >= 0.95, "{s}");
     }
     let err = |s: &serde_json::Value| s["final_position_error_m"].as_f64().unwrap();
-    let acc = |s: &serde_json::Value| s["map_accuracy"].as_f64().unwrap();
+    let acc = |s: &serde_json::Value| s["map_accuracy_share"].as_f64().unwrap();
     assert!(acc(&with) >= 0.98, "{with}");
     assert!(acc(&with) > acc(&without), "{without}\n{with}");
     assert!(

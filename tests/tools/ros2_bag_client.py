@@ -46,6 +46,8 @@ def scan(m):
         "angle_min": num(m.angle_min),
         "angle_max": num(m.angle_max),
         "angle_increment": num(m.angle_increment),
+        "time_increment": num(m.time_increment),
+        "scan_time": num(m.scan_time),
         "range_min": num(m.range_min),
         "range_max": num(m.range_max),
         "ranges": [num(r) for r in m.ranges],
@@ -56,25 +58,27 @@ def scan(m):
 def read_rosbags(path):
     from rosbags.highlevel import AnyReader
 
-    out = {"topics": {}, "scans": [], "estimates": [], "truths": [], "tf": [], "maps": []}
+    out = {"topics": {}, "scans": [], "estimates": [], "truths": [], "tf": [], "tf_static": [], "maps": []}
     with AnyReader([path]) as reader:
         for c in reader.connections:
-            out["topics"][c.topic] = {"type": c.msgtype, "count": 0}
+            qos = getattr(c.ext, "offered_qos_profiles", [])
+            durability = [q.durability.name for q in qos]
+            out["topics"][c.topic] = {"type": c.msgtype, "count": 0, "durability": durability}
         for connection, _timestamp, raw in reader.messages():
             msg = reader.deserialize(raw, connection.msgtype)
             out["topics"][connection.topic]["count"] += 1
             topic = connection.topic
             if topic == "/scan":
                 out["scans"].append(scan(msg))
-            elif topic in ("/goalseek/pose_estimate", "/goalseek/pose_truth"):
+            elif topic in ("/pose_estimate", "/pose_truth"):
                 key = "estimates" if topic.endswith("estimate") else "truths"
                 out[key].append(
                     {"stamp": stamp(msg.header), "frame_id": msg.header.frame_id, "pose": pose(msg.pose)}
                 )
-            elif topic == "/tf":
+            elif topic in ("/tf", "/tf_static"):
                 for t in msg.transforms:
                     tr = t.transform
-                    out["tf"].append(
+                    out["tf" if topic == "/tf" else "tf_static"].append(
                         {
                             "stamp": stamp(t.header),
                             "parent": t.header.frame_id,

@@ -93,6 +93,8 @@ fn map_server_export_reads_back() {
     for n in line["origin: [".len()..line.len() - 1].split(',') {
         let decimals = n.trim().split_once('.').map_or(0, |(_, d)| d.len());
         assert!(decimals <= 9, "{line}");
+        // Always a decimal point, so every element reads as a float (`-48.0`, not `-48`).
+        assert!(n.contains('.'), "{line}");
     }
     assert!(yaml.contains("free_thresh: 0.196\n") && yaml.contains("occupied_thresh: 0.65\n"));
     let nums: Vec<f64> = line["origin: [".len()..line.len() - 1]

@@ -2,11 +2,13 @@
 //! a run while it happens to Foxglove, Lichtblick or any client of the `foxglove.sdk.v1`
 //! protocol. See `docs/live-view.md`.
 //!
-//! Topics (protobuf, Foxglove schemas): `/scan` (`foxglove.LaserScan`, frame `base_link`),
-//! `/pose_estimate` and, in the simulator, `/pose_truth` (`foxglove.PoseInFrame`, frame `map`),
-//! `/tf` (`foxglove.FrameTransforms`, map -> base_link by the estimate), `/map`
+//! Topics (protobuf, Foxglove schemas), named as in both recording profiles: `/scan`
+//! (`foxglove.LaserScan`, frame `laser`), `/pose_estimate` and, in the simulator,
+//! `/pose_truth` (`foxglove.PoseInFrame`, frame `map`), `/tf` (`foxglove.FrameTransforms`,
+//! map -> base_link by the estimate), `/tf_static` (base_link -> laser, the identity), `/map`
 //! (`foxglove.Grid`, occupancy 100 / 0 / -1 as ROS maps) and `/markers`
-//! (`foxglove.SceneUpdate`: the target, landmarks and points B).
+//! (`foxglove.SceneUpdate`: the target, landmarks and points B). `/map` and `/tf_static` are
+//! latched: a client that subscribes late gets their last message at once.
 //!
 //! A run never waits for a client unless `--live-wait` asks it to, and never fails because
 //! of one: messages for a slow or absent client are dropped by the server.
@@ -20,9 +22,11 @@ use foxglove::messages::{
     PackedElementField, Pose, PoseInFrame, Quaternion, SceneEntity, SceneUpdate, SpherePrimitive,
     Timestamp, Vector2, Vector3, packed_element_field::NumericType,
 };
-use foxglove::{Channel, Context, WebSocketServerHandle};
+use foxglove::websocket::{ChannelView, Client, ServerListener};
+use foxglove::{Channel, Context, PartialMetadata, WebSocketServerHandle};
 use localiser::OccupancyGrid;
 use scan_types::{Pose2, RayStatus, Scan, ScanGeometry, WorldPoint};
+use std::sync::{Arc, Mutex, OnceLock};
 
 /// The address `--live` serves on when given without one (Foxglove's usual port).
 pub const DEFAULT_ADDR: &str = "127.0.0.1:8765";
@@ -35,15 +39,19 @@ pub const ESTIMATE_TOPIC: &str = "/pose_estimate";
 pub const TRUTH_TOPIC: &str = "/pose_truth";
 /// Topic of the transforms (map -> base_link).
 pub const TF_TOPIC: &str = "/tf";
+/// Topic of the fixed transform base_link -> laser.
+pub const TF_STATIC_TOPIC: &str = "/tf_static";
 /// Topic of the occupancy grid.
 pub const MAP_TOPIC: &str = "/map";
 /// Topic of the target, landmarks and points B.
 pub const MARKERS_TOPIC: &str = "/markers";
 
 /// The map frame.
-const MAP_FRAME: &str = "map";
-/// The robot's (and the laser's) frame.
-const BASE_FRAME: &str = "base_link";
+const MAP_FRAME: &str = scan_log::MAP_FRAME;
+/// The robot's frame (goalseek tracks the laser, so `laser` sits at it).
+const BASE_FRAME: &str = scan_log::ROS2_BASE_FRAME;
+/// The scans' frame.
+const LASER_FRAME: &str = scan_log::LASER_FRAME;
 /// The map is sent at most this often between leg ends.
 const MAP_PERIOD: Duration = Duration::from_secs(1);
 
@@ -121,6 +129,55 @@ pub fn parse_addr(text: &str) -> anyhow::Result<(String, u16)> {
     Ok((host.to_string(), port))
 }
 
+/// The latched topics: their channels and last messages, handed to each new subscriber.
+#[derive(Default)]
+struct Latch {
+    map: OnceLock<Arc<Channel<Grid>>>,
+    tf_static: OnceLock<Arc<Channel<FrameTransforms>>>,
+    last_map: Mutex<Option<(Grid, u64)>>,
+}
+
+impl Latch {
+    /// Publishes `grid` at `ns` and keeps it for later subscribers.
+    fn publish_map(&self, grid: Grid, ns: u64) {
+        if let Some(ch) = self.map.get() {
+            ch.log_with_time(&grid, ns);
+        }
+        if let Ok(mut last) = self.last_map.lock() {
+            *last = Some((grid, ns));
+        }
+    }
+}
+
+impl ServerListener for Latch {
+    fn on_subscribe(&self, client: Client, channel: ChannelView) {
+        let to = |ns: u64| PartialMetadata { log_time: Some(ns) };
+        if channel.topic() == MAP_TOPIC {
+            let last = self.last_map.lock().ok().and_then(|m| m.clone());
+            if let (Some(ch), Some((grid, ns))) = (self.map.get(), last) {
+                ch.log_with_meta_to_sink(&grid, to(ns), client.sink_id());
+            }
+        } else if channel.topic() == TF_STATIC_TOPIC
+            && let Some(ch) = self.tf_static.get()
+        {
+            ch.log_with_meta_to_sink(&laser_transform(), to(0), client.sink_id());
+        }
+    }
+}
+
+/// The fixed transform base_link -> laser: the identity.
+fn laser_transform() -> FrameTransforms {
+    FrameTransforms {
+        transforms: vec![FrameTransform {
+            timestamp: Some(Timestamp::new(0, 0)),
+            parent_frame_id: BASE_FRAME.into(),
+            child_frame_id: LASER_FRAME.into(),
+            translation: Some(vec3(0.0, 0.0, 0.0)),
+            rotation: Some(yaw(0.0)),
+        }],
+    }
+}
+
 /// A running live-view server and the channels it publishes on.
 pub struct LiveView {
     /// The channels' context, kept for as long as they publish.
@@ -131,7 +188,7 @@ pub struct LiveView {
     estimate: Channel<PoseInFrame>,
     truth: Channel<PoseInFrame>,
     tf: Channel<FrameTransforms>,
-    map: Channel<Grid>,
+    latch: Arc<Latch>,
     markers: Channel<SceneUpdate>,
     grid: OccupancyGrid,
     map_sent: Option<Instant>,
@@ -156,9 +213,11 @@ impl LiveView {
     pub fn start(addr: &str, map_resolution_m: f64) -> anyhow::Result<LiveView> {
         let (host, port) = parse_addr(addr)?;
         let ctx = Context::new();
+        let latch = Arc::new(Latch::default());
         let server = ctx
             .websocket_server()
             .name(format!("goalseek robot-app {}", env!("CARGO_PKG_VERSION")))
+            .listener(latch.clone())
             .bind(host.clone(), port)
             .start_blocking()
             .with_context(|| {
@@ -172,6 +231,12 @@ impl LiveView {
             format!("{host}:{}", server.port())
         };
         tracing::info!("live view on ws://{bound}: connect Foxglove or Lichtblick to it");
+        let _ = latch
+            .map
+            .set(Arc::new(ctx.channel_builder(MAP_TOPIC).build()));
+        let _ = latch
+            .tf_static
+            .set(Arc::new(ctx.channel_builder(TF_STATIC_TOPIC).build()));
         Ok(LiveView {
             _ctx: ctx.clone(),
             addr: bound,
@@ -180,7 +245,7 @@ impl LiveView {
             estimate: ctx.channel_builder(ESTIMATE_TOPIC).build(),
             truth: ctx.channel_builder(TRUTH_TOPIC).build(),
             tf: ctx.channel_builder(TF_TOPIC).build(),
-            map: ctx.channel_builder(MAP_TOPIC).build(),
+            latch,
             markers: ctx.channel_builder(MARKERS_TOPIC).build(),
             grid: OccupancyGrid::new(map_resolution_m),
             map_sent: None,
@@ -220,7 +285,8 @@ impl LiveView {
             || self.estimate.has_sinks()
             || self.truth.has_sinks()
             || self.tf.has_sinks()
-            || self.map.has_sinks()
+            || self.latch.map.get().is_some_and(|c| c.has_sinks())
+            || self.latch.tf_static.get().is_some_and(|c| c.has_sinks())
             || self.markers.has_sinks()
     }
 
@@ -295,13 +361,13 @@ impl LiveView {
     /// Publishes the map built from the scans so far.
     fn send_own_map(&mut self) {
         self.map_sent = Some(Instant::now());
-        publish_map(&self.map, &self.grid, self.stamp_s);
+        publish_map(&self.latch, &self.grid, self.stamp_s);
     }
 
     /// Publishes `grid` as the map (the run's own, at its end).
     pub fn send_map(&mut self, grid: &OccupancyGrid) {
         self.map_sent = Some(Instant::now());
-        publish_map(&self.map, grid, self.stamp_s);
+        publish_map(&self.latch, grid, self.stamp_s);
     }
 
     /// Sends the target, landmarks and points B so far.
@@ -416,11 +482,11 @@ impl Drop for LiveView {
     }
 }
 
-/// Publishes `grid` on `channel` stamped `stamp_s` (nothing for an empty grid).
-fn publish_map(channel: &Channel<Grid>, grid: &OccupancyGrid, stamp_s: f64) {
+/// Publishes `grid` on the latched `/map` stamped `stamp_s` (nothing for an empty grid).
+fn publish_map(latch: &Latch, grid: &OccupancyGrid, stamp_s: f64) {
     let ts = timestamp(stamp_s);
     if let Some(msg) = grid_message(grid, ts) {
-        channel.log_with_time(&msg, ts.total_nanos());
+        latch.publish_map(msg, ts.total_nanos());
     }
 }
 
@@ -467,7 +533,7 @@ fn pose_in_map(p: Pose2, ts: Timestamp) -> PoseInFrame {
     }
 }
 
-/// A scan as `foxglove.LaserScan` in `base_link`: a ray with nothing in range reads +inf, a
+/// A scan as `foxglove.LaserScan` in `laser`: a ray with nothing in range reads +inf, a
 /// ray the sensor reported an error for reads NaN (as the ROS 2 profile writes them).
 fn laser_scan(geometry: &ScanGeometry, scan: &Scan, ts: Timestamp) -> LaserScan {
     let ranges = scan
@@ -482,7 +548,7 @@ fn laser_scan(geometry: &ScanGeometry, scan: &Scan, ts: Timestamp) -> LaserScan 
         .collect();
     LaserScan {
         timestamp: Some(ts),
-        frame_id: BASE_FRAME.into(),
+        frame_id: LASER_FRAME.into(),
         pose: Some(Pose {
             position: Some(vec3(0.0, 0.0, 0.0)),
             orientation: Some(yaw(0.0)),

@@ -24,7 +24,7 @@ pub struct Summary {
     pub collisions: usize,
     /// Distance commanded, metres: the sum of the forward moves the navigator sent (not what
     /// the robot drove; see `true_path_length_m`).
-    pub path_length_m: f64,
+    pub commanded_path_length_m: f64,
     /// Distance the robot truly drove, metres (simulator only): the `p` of SPL.
     pub true_path_length_m: Option<f64>,
     /// Shortest collision-free path from start to target for the robot's disc in the true
@@ -47,14 +47,14 @@ pub struct Summary {
     pub method: String,
     /// Noise seed (simulator).
     pub seed: Option<u64>,
-    /// Start pose `[x, y, theta_deg]`.
-    pub start: [f64; 3],
-    /// Target `[x, y]`.
-    pub goal: [f64; 2],
-    /// Final estimated pose `[x, y, theta_deg]`.
-    pub final_estimate: [f64; 3],
-    /// Final true pose `[x, y, theta_deg]` (simulator only).
-    pub final_truth: Option<[f64; 3]>,
+    /// Start pose.
+    pub start: PoseOut,
+    /// Target.
+    pub goal: PointOut,
+    /// Final estimated pose.
+    pub final_estimate: PoseOut,
+    /// Final true pose (simulator only).
+    pub final_truth: Option<PoseOut>,
     /// A one-line note on how the run ended (the error, for a failure).
     pub note: String,
     /// The narrow passages the run drove through (graded clearance), in leg order.
@@ -67,13 +67,54 @@ pub struct Summary {
     pub heading_sigma_deg: Vec<f64>,
 }
 
+/// A pose in a JSON report: metres and degrees.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct PoseOut {
+    /// X, metres.
+    pub x_m: f64,
+    /// Y, metres.
+    pub y_m: f64,
+    /// Heading, degrees.
+    pub heading_deg: f64,
+}
+
+impl PoseOut {
+    /// The report form of `p`.
+    pub fn of(p: &scan_types::Pose2) -> Self {
+        Self {
+            x_m: p.x_m,
+            y_m: p.y_m,
+            heading_deg: p.theta_rad.to_degrees(),
+        }
+    }
+}
+
+/// A point in a JSON report, metres.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct PointOut {
+    /// X, metres.
+    pub x_m: f64,
+    /// Y, metres.
+    pub y_m: f64,
+}
+
+impl PointOut {
+    /// The report form of `p`.
+    pub fn of(p: scan_types::WorldPoint) -> Self {
+        Self {
+            x_m: p.x_m(),
+            y_m: p.y_m(),
+        }
+    }
+}
+
 /// A passage narrower than the full margin allows, taken on one leg.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct NarrowPassage {
     /// The leg's number (1 = the first leg driven).
     pub leg: usize,
-    /// Where the robot's centre passes closest to an obstacle, `[x, y]` in metres (estimate's frame).
-    pub at: [f64; 2],
+    /// Where the robot's centre passes closest to an obstacle (estimate's frame).
+    pub at: PointOut,
     /// Distance from there to the nearest hit of the planning scan, metres.
     pub clearance_m: f64,
     /// The passage's width across the leg, metres.
@@ -87,7 +128,7 @@ pub fn narrow_passages(outcome: &navigator::Outcome) -> Vec<NarrowPassage> {
         .iter()
         .map(|n| NarrowPassage {
             leg: n.leg,
-            at: [n.at.x_m(), n.at.y_m()],
+            at: PointOut::of(n.at),
             clearance_m: n.clearance_m,
             width_m: n.width_m,
         })

@@ -63,6 +63,15 @@ impl Recorder {
         })
     }
 
+    /// Sets the sensor's scan period, seconds, for the ROS 2 scans' `scan_time` and
+    /// `time_increment` (goalseek's recording keeps the stamps only).
+    pub fn with_scan_period(self, scan_period_s: Option<f64>) -> Self {
+        match (self, scan_period_s) {
+            (Recorder::Ros2(r), Some(t)) => Recorder::Ros2(r.with_scan_period(t)),
+            (r, _) => r,
+        }
+    }
+
     /// Records a scan without poses.
     pub fn write(&mut self, scan: &Scan) -> Result<(), LogError> {
         match self {

@@ -4,6 +4,9 @@
 use std::path::Path;
 use std::process::{Command, Output, Stdio};
 
+#[path = "common/key_units.rs"]
+mod key_units;
+
 fn robot_app(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_robot-app"))
         .args(args)
@@ -112,8 +115,8 @@ fn a_world_file_runs_its_own_scenario() {
     let summary: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
     // The summary's start and goal are the file's, not the paper's (-3.92, -4.26) and (4, 4).
-    let goal = summary["goal"].as_array().unwrap();
-    let (gx, gy) = (goal[0].as_f64().unwrap(), goal[1].as_f64().unwrap());
+    let goal = &summary["goal"];
+    let (gx, gy) = (goal["x_m"].as_f64().unwrap(), goal["y_m"].as_f64().unwrap());
     assert!((gx, gy) != (4.0, 4.0), "{summary}");
     let table: toml::Table = text.parse().unwrap();
     let target = table["target"].as_array().unwrap();
@@ -121,8 +124,8 @@ fn a_world_file_runs_its_own_scenario() {
     assert!((target[1].as_float().unwrap() - gy).abs() < 1e-9, "{text}");
     // SPL's inputs: the geodesic is never shorter than the straight line, SPL in [0, 1] and
     // 0 exactly for a failure.
-    let start = summary["start"].as_array().unwrap();
-    let straight = (start[0].as_f64().unwrap() - gx).hypot(start[1].as_f64().unwrap() - gy);
+    let start = &summary["start"];
+    let straight = (start["x_m"].as_f64().unwrap() - gx).hypot(start["y_m"].as_f64().unwrap() - gy);
     let l = summary["geodesic_m"].as_f64().unwrap();
     assert!(l >= straight - 1e-9, "{summary}");
     assert!(
@@ -158,6 +161,25 @@ fn a_world_file_runs_its_own_scenario() {
     assert_eq!(rows[0]["geodesic_m"], summary["geodesic_m"]);
     assert_eq!(file["aggregates"][0]["spl"], rows[0]["spl"]);
     assert_eq!(file["aggregates"][0]["spl_runs"], 1);
+
+    // Every key of both files names its unit or is a documented unitless one.
+    assert_eq!(
+        key_units::keys_without_unit(&summary),
+        Vec::<String>::new(),
+        "{summary}"
+    );
+    assert_eq!(
+        key_units::keys_without_unit(&file),
+        Vec::<String>::new(),
+        "{file}"
+    );
+    // A pose's heading is in degrees: the summary's start is the world file's, given in degrees.
+    let start_deg = table["start"].as_array().unwrap()[2].as_float().unwrap();
+    let d = summary["start"]["heading_deg"].as_f64().unwrap() - start_deg;
+    assert!(
+        (d + 540.0).rem_euclid(360.0) - 180.0 < 1e-9,
+        "{summary} {text}"
+    );
 }
 
 #[test]

@@ -87,7 +87,12 @@ fn a_room_is_explored_on_a_real_robot_s_code_path() {
     assert_eq!(s["end"], "explored", "{s}");
     assert!(s["goals_tried"].as_u64().unwrap() >= 1, "{s}");
     // No truth on a robot: no coverage, accuracy, error or seed, and no truth.png.
-    for k in ["coverage", "map_accuracy", "final_position_error_m", "seed"] {
+    for k in [
+        "coverage_share",
+        "map_accuracy_share",
+        "final_position_error_m",
+        "seed",
+    ] {
         assert!(s[k].is_null(), "{k}: {s}");
     }
     assert!(!dir.join("truth.png").exists());

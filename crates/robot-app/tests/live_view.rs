@@ -170,6 +170,7 @@ fn a_foxglove_websocket_client_receives_the_scans_of_a_sim_run() {
         ("/pose_estimate", "foxglove.PoseInFrame"),
         ("/pose_truth", "foxglove.PoseInFrame"),
         ("/tf", "foxglove.FrameTransforms"),
+        ("/tf_static", "foxglove.FrameTransforms"),
         ("/map", "foxglove.Grid"),
         ("/markers", "foxglove.SceneUpdate"),
     ] {
@@ -192,7 +193,7 @@ fn a_foxglove_websocket_client_receives_the_scans_of_a_sim_run() {
     for s in scans {
         assert_eq!(u(&s["ranges"]) as usize, geometry.ray_count);
         assert!(u(&s["hits"]) > 0, "{s}");
-        assert_eq!(s["frame_id"], "base_link");
+        assert_eq!(s["frame_id"], "laser");
         assert!((f(&s["start_angle"]) - geometry.first_bearing_rad).abs() < 1e-12);
         assert!((f(&s["end_angle"]) - geometry.last_bearing_rad()).abs() < 1e-12);
     }
@@ -213,6 +214,8 @@ fn a_foxglove_websocket_client_receives_the_scans_of_a_sim_run() {
     let tf = d["tf"].as_array().unwrap();
     assert!(!tf.is_empty() && tf.len() as u64 <= run_scans);
     assert!(tf.iter().all(|t| t[0] == "map" && t[1] == "base_link"));
+    // The laser sits at base_link, sent once, on subscribing.
+    assert_eq!(d["tf_static"], serde_json::json!([["base_link", "laser"]]));
     let maps = d["maps"].as_array().unwrap();
     assert!(!maps.is_empty());
     let last = &maps[maps.len() - 1];
@@ -224,6 +227,64 @@ fn a_foxglove_websocket_client_receives_the_scans_of_a_sim_run() {
     assert_eq!(u(&markers["target"]), 1);
     assert!(u(&markers["landmarks"]) > 0, "{markers}");
     assert!(u(&markers["points_b"]) > 0, "{markers}");
+}
+
+/// `/map` and `/tf_static` are latched: a client that subscribes after the map was sent gets
+/// it at once, with the fixed transform, and nothing else (no scan was sent since).
+#[test]
+#[allow(clippy::print_stderr)] // the skip notice goes to the terminal
+fn a_late_client_gets_the_last_map() {
+    if !python_client_available() {
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "CI is set but python3 lacks websockets"
+        );
+        eprintln!("skipped: python3 lacks websockets or protobuf");
+        return;
+    }
+    let port = free_port();
+    let mut view = robot_app::live::LiveView::start(&format!("127.0.0.1:{port}"), 0.05).unwrap();
+    // A 1 m wide wall 2 m ahead, seen from the origin.
+    let geometry = scan_types::ScanGeometry::centred(41, 40f64.to_radians(), 0.02, 4.0).unwrap();
+    let ranges: Vec<f64> = (0..41)
+        .map(|i| 2.0 / geometry.bearing_rad(i).cos())
+        .collect();
+    let scan = scan_types::Scan {
+        status: vec![scan_types::RayStatus::Hit; ranges.len()],
+        ranges_m: ranges,
+        intensities: None,
+        sensor_time_ms: None,
+        host_time_s: 5.0,
+    };
+    let mut grid = localiser::OccupancyGrid::new(0.05);
+    grid.integrate(&scan_types::Pose2::default(), &geometry, &scan);
+    view.send_map(&grid);
+    let script = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../tests/tools/foxglove_live_client.py"
+    );
+    // The client connects after the map was sent and watches for 2 s.
+    let client = Command::new("python3")
+        .args([script, &format!("ws://127.0.0.1:{port}"), "60", "2"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("python3 runs");
+    let client = finish(client, Duration::from_secs(90), "the live client");
+    view.finish(None);
+    assert!(
+        client.status.success(),
+        "{}",
+        String::from_utf8_lossy(&client.stderr)
+    );
+    let d: Value = serde_json::from_slice(&client.stdout).expect("one JSON object");
+    assert_eq!(d["closed"], "watched");
+    let maps = d["maps"].as_array().unwrap();
+    assert_eq!(maps.len(), 1, "{d}");
+    assert_eq!(maps[0]["frame_id"], "map");
+    assert_eq!(maps[0]["values"], serde_json::json!([-1, 0, 100]));
+    assert_eq!(d["tf_static"], serde_json::json!([["base_link", "laser"]]));
+    assert_eq!(d["scans"], serde_json::json!([]));
 }
 
 #[test]

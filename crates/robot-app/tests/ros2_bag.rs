@@ -167,24 +167,40 @@ fn rosbags_and_mcap_ros2_read_a_ros2_recording_of_a_sim_run() {
     let topics = &d["topics"];
     for (topic, ty, count) in [
         ("/scan", "sensor_msgs/msg/LaserScan", scans),
-        (
-            "/goalseek/pose_estimate",
-            "geometry_msgs/msg/PoseStamped",
-            scans,
-        ),
-        (
-            "/goalseek/pose_truth",
-            "geometry_msgs/msg/PoseStamped",
-            scans,
-        ),
+        ("/pose_estimate", "geometry_msgs/msg/PoseStamped", scans),
+        ("/pose_truth", "geometry_msgs/msg/PoseStamped", scans),
         ("/tf", "tf2_msgs/msg/TFMessage", scans),
+        ("/tf_static", "tf2_msgs/msg/TFMessage", 1),
         ("/map", "nav_msgs/msg/OccupancyGrid", 1),
     ] {
         assert_eq!(topics[topic]["type"], ty, "{topic}");
         assert_eq!(u(&topics[topic]["count"]), count, "{topic}");
         assert_eq!(u(&d["mcap_ros2"]["counts"][topic]), count, "{topic}");
     }
-    assert_eq!(topics.as_object().unwrap().len(), 5);
+    assert_eq!(topics.as_object().unwrap().len(), 6);
+    // The same topic names as goalseek's own recording.
+    assert_eq!(scan_log::ROS2_POSE_ESTIMATE_TOPIC, scan_log::EST_POSE_TOPIC);
+    assert_eq!(scan_log::ROS2_POSE_TRUTH_TOPIC, scan_log::TRUE_POSE_TOPIC);
+    // /tf_static and /map are latched (transient local durability) as rosbag2 records them.
+    for topic in ["/tf_static", "/map"] {
+        assert_eq!(
+            topics[topic]["durability"],
+            serde_json::json!(["TRANSIENT_LOCAL"]),
+            "{topic}"
+        );
+    }
+    // base_link -> laser: the laser is the tracked point, so the identity.
+    let fixed = d["tf_static"].as_array().unwrap();
+    assert_eq!(fixed.len(), 1, "{fixed:?}");
+    assert_eq!(
+        (&fixed[0]["parent"], &fixed[0]["child"]),
+        (&"base_link".into(), &"laser".into())
+    );
+    assert_eq!(fixed[0]["translation"], serde_json::json!([0.0, 0.0, 0.0]));
+    assert_eq!(
+        fixed[0]["rotation"],
+        serde_json::json!([0.0, 0.0, 0.0, 1.0])
+    );
     assert_eq!(d["mcap_ros2"]["profile"], "ros2");
     assert_eq!(
         d["mcap_ros2"]["metadata"],
@@ -207,8 +223,17 @@ fn rosbags_and_mcap_ros2_read_a_ros2_recording_of_a_sim_run() {
         ("last_scan", &default[default.len() - 1]),
     ] {
         let m = &d[key];
-        assert_eq!(m["frame_id"], "base_link");
+        assert_eq!(m["frame_id"], "laser");
         let g = &rec.geometry;
+        // The paper sensor: 100 ms a turn, 685 rays over 240 deg, so 240/684 deg of a 360 deg
+        // turn between rays.
+        assert_eq!(f(&m["scan_time"]), f64::from(0.1f32));
+        let dt = 0.1 * (240.0 / 684.0) / 360.0;
+        assert!(
+            (f(&m["time_increment"]) - dt).abs() < 1e-6 * dt,
+            "{}",
+            m["time_increment"]
+        );
         assert_eq!(f(&m["angle_min"]), f64::from(g.first_bearing_rad as f32));
         assert_eq!(f(&m["angle_increment"]), f64::from(g.increment_rad as f32));
         assert_eq!(f(&m["range_min"]), f64::from(g.min_range_m as f32));
@@ -269,11 +294,11 @@ fn rosbags_and_mcap_ros2_read_a_ros2_recording_of_a_sim_run() {
         assert!(angle_diff(yaw(q, 0), want.theta_rad).abs() < 1e-12);
     }
     // The start pose of the summary is the first estimate.
-    let start = summary["start"].as_array().unwrap();
+    let start = &summary["start"];
     let first = d["estimates"][0]["pose"].as_array().unwrap();
-    assert!((f(&first[0]) - f(&start[0])).abs() < 1e-12);
-    assert!((f(&first[1]) - f(&start[1])).abs() < 1e-12);
-    assert!((yaw(first, 3).to_degrees() - f(&start[2])).abs() < 1e-9);
+    assert!((f(&first[0]) - f(&start["x_m"])).abs() < 1e-12);
+    assert!((f(&first[1]) - f(&start["y_m"])).abs() < 1e-12);
+    assert!((yaw(first, 3).to_degrees() - f(&start["heading_deg"])).abs() < 1e-9);
 
     // The map is map.pgm/map.yaml as map_server publishes them in trinary mode: rows from the
     // bottom of the image, black 100, white 0, grey -1.

@@ -72,7 +72,11 @@ mod outputs {
         });
         let lines: Vec<&str> = s.lines().collect();
         assert_eq!(lines.len(), 2);
-        assert_eq!(lines[0].split(',').count(), 11);
+        // Every column names its unit, headings in radians as in the TUM files.
+        assert_eq!(
+            lines[0],
+            "leg,est_x_m,est_y_m,est_heading_rad,true_x_m,true_y_m,true_heading_rad,landmark_x_m,landmark_y_m,b_x_m,b_y_m"
+        );
         assert_eq!(
             lines[1],
             "0,0.500000,0.250000,0.000000,,,,1.000000,2.000000,,"
@@ -93,7 +97,7 @@ mod outputs {
             legs: 0,
             scans: 1,
             collisions: 0,
-            path_length_m: 0.0,
+            commanded_path_length_m: 0.0,
             true_path_length_m: None,
             geodesic_m: None,
             spl: None,
@@ -104,9 +108,9 @@ mod outputs {
             cpu_time_s: 0.0,
             method: "goalseek".into(),
             seed: None,
-            start: [0.0; 3],
-            goal: [1.0, 1.0],
-            final_estimate: [0.0; 3],
+            start: PoseOut::of(&scan_types::Pose2::default()),
+            goal: PointOut::of(scan_types::WorldPoint::new(1.0, 1.0)),
+            final_estimate: PoseOut::of(&scan_types::Pose2::default()),
             final_truth: None,
             note: "laser timed out".into(),
             narrow_passages: Vec::new(),
@@ -366,8 +370,8 @@ mod batch_table {
             pair: None,
             method: "goalseek".into(),
             seed: 0,
-            start: [0.0; 3],
-            goal: [0.0; 2],
+            start: robot_app::outputs::PoseOut::of(&scan_types::Pose2::default()),
+            goal: robot_app::outputs::PointOut::of(scan_types::WorldPoint::new(0.0, 0.0)),
             reached,
             reason: if reached {
                 Reason::Reached
@@ -381,7 +385,7 @@ mod batch_table {
             final_heading_error_deg: Some(0.0),
             ate_rmse_m: Some(err),
             goal_distance_m: Some(0.1),
-            path_length_m: 1.0,
+            commanded_path_length_m: 1.0,
             true_path_length_m: None,
             geodesic_m: None,
             spl: None,
@@ -402,7 +406,7 @@ mod batch_table {
         let a = aggregate(&rows);
         assert_eq!(a.len(), 2);
         assert_eq!((a[0].group.as_str(), a[0].runs, a[0].reached), ("a", 3, 2));
-        assert!((a[0].success_pct - 200.0 / 3.0).abs() < 1e-9);
+        assert!((a[0].success_share - 2.0 / 3.0).abs() < 1e-12);
         assert!((a[0].median_final_error_m - 0.02).abs() < 1e-12);
         assert_eq!(a[0].reasons["leg_limit"], 1);
         let t = table(&a);

@@ -62,18 +62,18 @@ pub use foreign::{
     FOXGLOVE_LASER_SCAN, INVALID_ABOVE_MAX, INVALID_BELOW_MIN, INVALID_NAN, ROS2_LASER_SCAN,
 };
 pub use mcap_io::{
-    EST_POSE_TOPIC, MAX_MCAP_RECORD_BYTES, McapRecorder, MetadataRecord, SCAN_TOPIC, STATUS_HIT,
-    STATUS_MAX_RANGE, TRUE_POSE_TOPIC, parse_mcap, partial_path, read_mcap, read_mcap_metadata,
-    read_mcap_topic, recording_schemas,
+    EST_POSE_TOPIC, LASER_FRAME, MAP_FRAME, MAX_MCAP_RECORD_BYTES, McapRecorder, MetadataRecord,
+    SCAN_TOPIC, STATUS_HIT, STATUS_MAX_RANGE, TRUE_POSE_TOPIC, parse_mcap, partial_path, read_mcap,
+    read_mcap_metadata, read_mcap_topic, recording_schemas,
 };
 pub use playback::{
     GeometryOverride, LoopingLog, RecordedLaser, RecordedTruth, open_log, open_log_topic,
 };
 pub use record::LogRecord;
 pub use ros2_writer::{
-    ROS2_BASE_FRAME, ROS2_MAP_FRAME, ROS2_MAP_TOPIC, ROS2_OCCUPANCY_GRID, ROS2_POSE_ESTIMATE_TOPIC,
-    ROS2_POSE_STAMPED, ROS2_POSE_TRUTH_TOPIC, ROS2_TF_MESSAGE, ROS2_TF_TOPIC, Ros2Map,
-    Ros2Recorder, ros2_schema,
+    ROS2_BASE_FRAME, ROS2_LASER_FRAME, ROS2_MAP_FRAME, ROS2_MAP_TOPIC, ROS2_OCCUPANCY_GRID,
+    ROS2_POSE_ESTIMATE_TOPIC, ROS2_POSE_STAMPED, ROS2_POSE_TRUTH_TOPIC, ROS2_TF_MESSAGE,
+    ROS2_TF_STATIC_TOPIC, ROS2_TF_TOPIC, Ros2Map, Ros2Recorder, ros2_schema,
 };
 pub use run_log::{LegRecord, RunLog, trajectory_csv, tum, write_trajectory};
 pub use run_meta::{

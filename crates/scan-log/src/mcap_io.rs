@@ -16,10 +16,18 @@ use crate::{LogError, LogRecord};
 
 /// Topic of the scans.
 pub const SCAN_TOPIC: &str = "/scan";
-/// Topic of the simulator's true poses.
-pub const TRUE_POSE_TOPIC: &str = "/pose/true";
-/// Topic of the estimated poses.
-pub const EST_POSE_TOPIC: &str = "/pose/estimated";
+/// Topic of the simulator's true poses (the same in both recording profiles).
+pub const TRUE_POSE_TOPIC: &str = "/pose_truth";
+/// Topic of the estimated poses (the same in both recording profiles).
+pub const EST_POSE_TOPIC: &str = "/pose_estimate";
+/// The true poses' topic in recordings before the profiles shared their names.
+const OLD_TRUE_POSE_TOPIC: &str = "/pose/true";
+/// The estimated poses' topic in recordings before the profiles shared their names.
+const OLD_EST_POSE_TOPIC: &str = "/pose/estimated";
+/// The fixed frame of poses, and of scans drawn at a pose.
+pub const MAP_FRAME: &str = "map";
+/// The frame of a scan recorded without a pose.
+pub const LASER_FRAME: &str = "laser";
 
 /// Status code of a hit ray in the `goalseek.status` array.
 pub const STATUS_HIT: i32 = -1;
@@ -78,7 +86,7 @@ fn pose_schema() -> String {
       "seq": {{"type": "integer"}},
       "x_m": {{"type": "number"}},
       "y_m": {{"type": "number"}},
-      "theta_rad": {{"type": "number"}}}}}}
+      "heading_rad": {{"type": "number"}}}}}}
   }}
 }}"#
     )
@@ -173,7 +181,9 @@ struct PoseExtra {
     seq: u64,
     x_m: f64,
     y_m: f64,
-    theta_rad: f64,
+    /// `theta_rad` in recordings before the unit names were unified.
+    #[serde(alias = "theta_rad")]
+    heading_rad: f64,
 }
 
 #[derive(Serialize, Deserialize)]
@@ -382,7 +392,7 @@ impl McapRecorder {
 
     /// Records one scan with its geometry and, where known, the true and estimated poses.
     ///
-    /// In Foxglove the scan is drawn in frame `world` at the estimated pose (else the true
+    /// In Foxglove the scan is drawn in frame `map` at the estimated pose (else the true
     /// pose) when one is given, and in frame `laser` otherwise.
     pub fn record_scan(
         &mut self,
@@ -441,7 +451,7 @@ impl McapRecorder {
     }
 }
 
-/// The Foxglove `LaserScan` message of scan number `seq`, drawn at `shown` (in frame `world`)
+/// The Foxglove `LaserScan` message of scan number `seq`, drawn at `shown` (in frame `map`)
 /// or in frame `laser` without a pose.
 fn laser_scan_msg(
     geometry: &ScanGeometry,
@@ -455,7 +465,12 @@ fn laser_scan_msg(
             sec: stamp.sec,
             nsec: stamp.nsec,
         },
-        frame_id: if shown.is_some() { "world" } else { "laser" }.into(),
+        frame_id: if shown.is_some() {
+            MAP_FRAME
+        } else {
+            LASER_FRAME
+        }
+        .into(),
         pose: FoxPose::of(shown),
         start_angle: geometry.first_bearing_rad,
         end_angle: geometry.last_bearing_rad(),
@@ -498,13 +513,13 @@ fn pose_msg(p: Pose2, seq: u64, stamp: &Time) -> PoseMsg {
             sec: stamp.sec,
             nsec: stamp.nsec,
         },
-        frame_id: "world".into(),
+        frame_id: MAP_FRAME.into(),
         pose: FoxPose::of(Some(p)),
         goalseek: PoseExtra {
             seq,
             x_m: p.x_m,
             y_m: p.y_m,
-            theta_rad: p.theta_rad,
+            heading_rad: p.theta_rad,
         },
     }
 }
@@ -610,6 +625,16 @@ fn channel_kind(channel: &mcap::Channel<'_>) -> Option<Kind> {
     }
 }
 
+/// Whether `topic` holds goalseek's true poses (`Some(true)`), its estimates (`Some(false)`),
+/// or neither; the names of older recordings included.
+fn pose_topic(topic: &str) -> Option<bool> {
+    match topic {
+        TRUE_POSE_TOPIC | OLD_TRUE_POSE_TOPIC => Some(true),
+        EST_POSE_TOPIC | OLD_EST_POSE_TOPIC => Some(false),
+        _ => None,
+    }
+}
+
 /// Every laser topic of MCAP bytes, decoded; goalseek's poses joined to their scans.
 pub(crate) fn scan_mcap(bytes: &[u8], path: &Path) -> Found {
     let mut found = Found::default();
@@ -656,7 +681,8 @@ pub(crate) fn scan_mcap(bytes: &[u8], path: &Path) -> Found {
             Some(Kind::Protobuf) => foreign::decode_foxglove_protobuf(&msg.data)
                 .map(Decoded::Foreign)
                 .map_err(|m| bad(format!("not a protobuf {FOXGLOVE_LASER_SCAN}: {m}"))),
-            None if topic == TRUE_POSE_TOPIC || topic == EST_POSE_TOPIC => {
+            // goalseek's JSON poses; a ROS 2 recording's CDR poses on the same topics are not.
+            None if msg.channel.message_encoding == "json" && pose_topic(topic).is_some() => {
                 let pose: PoseMsg = match serde_json::from_slice(&msg.data) {
                     Ok(p) => p,
                     Err(e) => {
@@ -669,7 +695,7 @@ pub(crate) fn scan_mcap(bytes: &[u8], path: &Path) -> Found {
                 let p = Pose2 {
                     x_m: g.x_m,
                     y_m: g.y_m,
-                    theta_rad: g.theta_rad,
+                    theta_rad: g.heading_rad,
                 };
                 let scans = &mut found.laser_topic(SCAN_TOPIC).entries;
                 let rec = by_seq.get(&g.seq).and_then(|&i| match scans.get_mut(i) {
@@ -677,7 +703,7 @@ pub(crate) fn scan_mcap(bytes: &[u8], path: &Path) -> Found {
                     _ => None,
                 });
                 match rec {
-                    Some(rec) if topic == TRUE_POSE_TOPIC => rec.true_pose = Some(p),
+                    Some(rec) if pose_topic(topic) == Some(true) => rec.true_pose = Some(p),
                     Some(rec) => rec.pose = Some(p),
                     None => scans.push(Err(bad(format!("pose for unknown scan {}", g.seq)))),
                 }

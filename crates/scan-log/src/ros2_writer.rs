@@ -8,20 +8,30 @@ use scan_types::{Pose2, RayStatus, Scan, ScanGeometry};
 
 use crate::LogError;
 use crate::foreign::ROS2_LASER_SCAN;
-use crate::mcap_io::{PartialMcap, SCAN_TOPIC, time_of};
+use crate::mcap_io::{
+    EST_POSE_TOPIC, LASER_FRAME, MAP_FRAME, PartialMcap, SCAN_TOPIC, TRUE_POSE_TOPIC, time_of,
+};
 
-/// Topic of the estimated poses in a ROS 2 recording.
-pub const ROS2_POSE_ESTIMATE_TOPIC: &str = "/goalseek/pose_estimate";
-/// Topic of the simulator's true poses in a ROS 2 recording.
-pub const ROS2_POSE_TRUTH_TOPIC: &str = "/goalseek/pose_truth";
+/// Topic of the estimated poses in a ROS 2 recording (the same as goalseek's recording).
+pub const ROS2_POSE_ESTIMATE_TOPIC: &str = EST_POSE_TOPIC;
+/// Topic of the simulator's true poses in a ROS 2 recording (the same as goalseek's recording).
+pub const ROS2_POSE_TRUTH_TOPIC: &str = TRUE_POSE_TOPIC;
 /// Topic of the map at the end of a run in a ROS 2 recording.
 pub const ROS2_MAP_TOPIC: &str = "/map";
 /// Topic of the `map` to `base_link` transforms in a ROS 2 recording.
 pub const ROS2_TF_TOPIC: &str = "/tf";
+/// Topic of the fixed `base_link` to `laser` transform in a ROS 2 recording.
+pub const ROS2_TF_STATIC_TOPIC: &str = "/tf_static";
 /// Frame of the map, the poses and the grid.
-pub const ROS2_MAP_FRAME: &str = "map";
-/// Frame of the robot (the laser's pose, which goalseek tracks) and of the scans.
+pub const ROS2_MAP_FRAME: &str = MAP_FRAME;
+/// Frame of the robot: goalseek tracks the laser's pose, so `base_link` is the laser's.
 pub const ROS2_BASE_FRAME: &str = "base_link";
+/// Frame of the scans, at `base_link` (an identity transform on `/tf_static`).
+pub const ROS2_LASER_FRAME: &str = LASER_FRAME;
+
+/// The QoS rosbag2 records for a latched topic (`/tf_static`, `/map`): reliable,
+/// transient local, keep last 1, so a player hands it to late subscribers.
+const LATCHED_QOS: &str = "- history: 1\n  depth: 1\n  reliability: 1\n  durability: 1\n  deadline:\n    sec: 2147483647\n    nsec: 4294967295\n  lifespan:\n    sec: 2147483647\n    nsec: 4294967295\n  liveliness: 1\n  liveliness_lease_duration:\n    sec: 2147483647\n    nsec: 4294967295\n  avoid_ros_namespace_conventions: false\n";
 
 /// ROS 2 type name of a stamped pose.
 pub const ROS2_POSE_STAMPED: &str = "geometry_msgs/msg/PoseStamped";
@@ -92,7 +102,7 @@ pub fn ros2_schema(topic: &str) -> Option<(&'static str, String)> {
                 &[HEADER, TIME, MAP_META, POSE, POINT, QUATERNION],
             ),
         ),
-        ROS2_TF_TOPIC => (
+        ROS2_TF_TOPIC | ROS2_TF_STATIC_TOPIC => (
             ROS2_TF_MESSAGE,
             definition(
                 TF_MESSAGE,
@@ -196,17 +206,35 @@ fn stamp_of(host_time_s: f64) -> (Stamp, u64) {
     (stamp, ns)
 }
 
-/// A CDR `sensor_msgs/msg/LaserScan`: hits as read, +inf for no return (REP 117), NaN for an
-/// invalid reading.
-fn laser_scan_cdr(geometry: &ScanGeometry, scan: &Scan, stamp: Stamp) -> Vec<u8> {
+/// `time_increment` and `scan_time` of a LaserScan, seconds, for a sensor turning once per
+/// `scan_period_s` (0 and 0 when unknown, as ROS asks): the mirror turns `increment_rad` of
+/// a full turn between two rays.
+fn scan_times(geometry: &ScanGeometry, scan_period_s: Option<f64>) -> (f64, f64) {
+    match scan_period_s {
+        Some(t) if t.is_finite() && t > 0.0 => {
+            (t * geometry.increment_rad / std::f64::consts::TAU, t)
+        }
+        _ => (0.0, 0.0),
+    }
+}
+
+/// A CDR `sensor_msgs/msg/LaserScan` in frame `laser`: hits as read, +inf for no return
+/// (REP 117), NaN for an invalid reading; times from `scan_period_s` ([`scan_times`]).
+fn laser_scan_cdr(
+    geometry: &ScanGeometry,
+    scan: &Scan,
+    stamp: Stamp,
+    scan_period_s: Option<f64>,
+) -> Vec<u8> {
     let mut c = CdrOut::new();
-    c.header(stamp, ROS2_BASE_FRAME);
+    c.header(stamp, ROS2_LASER_FRAME);
+    let (time_increment_s, scan_time_s) = scan_times(geometry, scan_period_s);
     for v in [
         geometry.first_bearing_rad,
         geometry.last_bearing_rad(),
         geometry.increment_rad,
-        0.0,
-        0.0,
+        time_increment_s,
+        scan_time_s,
         geometry.min_range_m,
         geometry.max_range_m,
     ] {
@@ -235,12 +263,12 @@ fn pose_stamped_cdr(p: Pose2, stamp: Stamp) -> Vec<u8> {
     c.0
 }
 
-/// A CDR `tf2_msgs/msg/TFMessage` with the one transform `map` to `base_link` at `p`.
-fn tf_cdr(p: Pose2, stamp: Stamp) -> Vec<u8> {
+/// A CDR `tf2_msgs/msg/TFMessage` with the one transform `parent` to `child` at `p`.
+fn tf_cdr(parent: &str, child: &str, p: Pose2, stamp: Stamp) -> Vec<u8> {
     let mut c = CdrOut::new();
     c.u32(1);
-    c.header(stamp, ROS2_MAP_FRAME);
-    c.string(ROS2_BASE_FRAME);
+    c.header(stamp, parent);
+    c.string(child);
     c.planar_pose(p);
     c.0
 }
@@ -276,7 +304,8 @@ fn occupancy_grid_cdr(map: &Ros2Map, stamp: Stamp) -> Vec<u8> {
 }
 
 /// Writes a recording ROS 2 tools open (MCAP, profile `ros2`), atomically as
-/// [`crate::McapRecorder`] does: `/scan`, the estimated and true poses, `/tf` and `/map`.
+/// [`crate::McapRecorder`] does: `/scan`, the estimated and true poses, `/tf`, `/tf_static`
+/// and `/map`.
 ///
 /// Every scan ends an MCAP chunk, so a cut `<path>.partial` keeps the scans before the cut;
 /// dropping the recorder without `finish` finishes it.
@@ -286,6 +315,7 @@ pub struct Ros2Recorder {
     seq: u64,
     last: (Stamp, u64),
     geometry: Option<ScanGeometry>,
+    scan_period_s: Option<f64>,
 }
 
 impl Ros2Recorder {
@@ -297,7 +327,15 @@ impl Ros2Recorder {
             seq: 0,
             last: (Stamp::default(), 0),
             geometry: None,
+            scan_period_s: None,
         })
+    }
+
+    /// Sets the sensor's scan period, seconds, from which the scans' `scan_time` and
+    /// `time_increment` are filled (without it both are 0, "unknown").
+    pub fn with_scan_period(mut self, scan_period_s: f64) -> Self {
+        self.scan_period_s = Some(scan_period_s);
+        self
     }
 
     /// Sets the geometry of the scans [`Ros2Recorder::write`] records.
@@ -327,9 +365,13 @@ impl Ros2Recorder {
             return Ok(id);
         }
         let (name, text) = ros2_schema(topic).expect("a topic of the recording");
+        let mut meta = BTreeMap::new();
+        if topic == ROS2_TF_STATIC_TOPIC || topic == ROS2_MAP_TOPIC {
+            meta.insert("offered_qos_profiles".to_string(), LATCHED_QOS.to_string());
+        }
         let id = self.file.with(|w| {
             let schema = w.add_schema(name, "ros2msg", text.as_bytes())?;
-            w.add_channel(schema, topic, "cdr", &BTreeMap::new())
+            w.add_channel(schema, topic, "cdr", &meta)
         })?;
         self.channels.insert(topic, id);
         Ok(id)
@@ -356,7 +398,8 @@ impl Ros2Recorder {
     }
 
     /// Records one scan stamped with its host time and, where known, the true pose and the
-    /// estimated pose (with its `map` to `base_link` transform).
+    /// estimated pose (with its `map` to `base_link` transform); the first scan also gets the
+    /// `base_link` to `laser` identity on `/tf_static`.
     pub fn record_scan(
         &mut self,
         geometry: &ScanGeometry,
@@ -365,10 +408,16 @@ impl Ros2Recorder {
         est_pose: Option<Pose2>,
     ) -> Result<(), LogError> {
         let (stamp, ns) = stamp_of(scan.host_time_s);
-        self.message(SCAN_TOPIC, ns, &laser_scan_cdr(geometry, scan, stamp))?;
+        if self.seq == 0 {
+            let fixed = tf_cdr(ROS2_BASE_FRAME, ROS2_LASER_FRAME, Pose2::default(), stamp);
+            self.message(ROS2_TF_STATIC_TOPIC, ns, &fixed)?;
+        }
+        let msg = laser_scan_cdr(geometry, scan, stamp, self.scan_period_s);
+        self.message(SCAN_TOPIC, ns, &msg)?;
         if let Some(p) = est_pose {
             self.message(ROS2_POSE_ESTIMATE_TOPIC, ns, &pose_stamped_cdr(p, stamp))?;
-            self.message(ROS2_TF_TOPIC, ns, &tf_cdr(p, stamp))?;
+            let tf = tf_cdr(ROS2_MAP_FRAME, ROS2_BASE_FRAME, p, stamp);
+            self.message(ROS2_TF_TOPIC, ns, &tf)?;
         }
         if let Some(p) = true_pose {
             self.message(ROS2_POSE_TRUTH_TOPIC, ns, &pose_stamped_cdr(p, stamp))?;
@@ -463,7 +512,7 @@ mod tests {
     #[test]
     fn a_laser_scan_reads_back_through_the_cdr_reader() {
         let (stamp, _) = stamp_of(12.25);
-        let bytes = laser_scan_cdr(&geometry(), &scan(), stamp);
+        let bytes = laser_scan_cdr(&geometry(), &scan(), stamp, None);
         let s = decode_ros2_laser_scan(&bytes).unwrap();
         assert_eq!(s.stamp_s, 12.25);
         assert_eq!(s.first_rad, f64::from(-1.0f32));
@@ -487,12 +536,33 @@ mod tests {
         assert_eq!(&b[4 + 16..4 + 24], &1.5f64.to_le_bytes());
         // TFMessage: count 4, header 16, child frame length 4 and "base_link\0" 10: 34 bytes,
         // padded to 40 for the first double.
-        let b = tf_cdr(p, stamp);
+        let b = tf_cdr(ROS2_MAP_FRAME, ROS2_BASE_FRAME, p, stamp);
         assert_eq!(b.len(), 4 + 40 + 7 * 8);
         assert_eq!(&b[4 + 34..4 + 40], &[0; 6]);
         assert_eq!(&b[4 + 40..4 + 48], &1.5f64.to_le_bytes());
         // A half turn: the quaternion's z is sin(pi/2) = 1.
         assert_eq!(&b[b.len() - 16..b.len() - 8], &1.0f64.to_le_bytes());
+    }
+
+    #[test]
+    fn scan_times_follow_the_mirror() {
+        // URG-04LX: 100 ms a turn, 1024 steps a turn: 100 ms / 1024 = 97.65625 us a ray.
+        let g = ScanGeometry::new(-2.0, std::f64::consts::TAU / 1024.0, 682, 0.02, 5.6).unwrap();
+        let (dt, t) = scan_times(&g, Some(0.1));
+        assert!((dt - 97.65625e-6).abs() < 1e-15, "{dt}");
+        assert_eq!(t, 0.1);
+        // Unknown period: both 0.
+        assert_eq!(scan_times(&g, None), (0.0, 0.0));
+        assert_eq!(scan_times(&g, Some(f64::NAN)), (0.0, 0.0));
+        // In the message: after the header (stamp 8, "laser\0" with its length 10, padded to
+        // 20) come the three angles, then time_increment and scan_time as float32.
+        let (stamp, _) = stamp_of(1.0);
+        let b = laser_scan_cdr(&g, &scan(), stamp, Some(0.1));
+        assert_eq!(
+            &b[4 + 20 + 12..4 + 20 + 16],
+            &(97.65625e-6f32).to_le_bytes()
+        );
+        assert_eq!(&b[4 + 20 + 16..4 + 20 + 20], &0.1f32.to_le_bytes());
     }
 
     #[test]

@@ -92,7 +92,7 @@ fn opt(v: Option<f64>) -> String {
 /// `trajectory.csv` text: one row per leg end.
 pub fn trajectory_csv(log: &RunLog) -> String {
     let mut s = String::from(
-        "leg,est_x_m,est_y_m,est_theta_rad,true_x_m,true_y_m,true_theta_rad,landmark_x_m,landmark_y_m,b_x_m,b_y_m\n",
+        "leg,est_x_m,est_y_m,est_heading_rad,true_x_m,true_y_m,true_heading_rad,landmark_x_m,landmark_y_m,b_x_m,b_y_m\n",
     );
     for r in &log.legs {
         let _ = writeln!(

@@ -35,6 +35,83 @@ pub struct RunSettings<C> {
     pub noise: bool,
 }
 
+/// A pose in metadata: `{x_m, y_m, heading_rad}` (recordings before the unit names: `[x, y, theta]`).
+#[derive(Debug, Clone, Copy, serde::Serialize, serde::Deserialize)]
+#[serde(untagged)]
+enum PoseJson {
+    Named {
+        x_m: f64,
+        y_m: f64,
+        heading_rad: f64,
+    },
+    Bare([f64; 3]),
+}
+
+impl PoseJson {
+    fn of([x_m, y_m, heading_rad]: [f64; 3]) -> Self {
+        Self::Named {
+            x_m,
+            y_m,
+            heading_rad,
+        }
+    }
+
+    fn get(self) -> [f64; 3] {
+        match self {
+            Self::Named {
+                x_m,
+                y_m,
+                heading_rad,
+            } => [x_m, y_m, heading_rad],
+            Self::Bare(p) => p,
+        }
+    }
+}
+
+/// A point in metadata: `{x_m, y_m}` (recordings before the unit names: `[x, y]`).
+#[derive(Debug, Clone, Copy, serde::Serialize, serde::Deserialize)]
+#[serde(untagged)]
+enum PointJson {
+    Named { x_m: f64, y_m: f64 },
+    Bare([f64; 2]),
+}
+
+impl PointJson {
+    fn of([x_m, y_m]: [f64; 2]) -> Self {
+        Self::Named { x_m, y_m }
+    }
+
+    fn get(self) -> [f64; 2] {
+        match self {
+            Self::Named { x_m, y_m } => [x_m, y_m],
+            Self::Bare(p) => p,
+        }
+    }
+}
+
+/// Serde of a `[x, y, heading rad]` field as [`PoseJson`].
+mod pose_field {
+    pub fn serialize<S: serde::Serializer>(p: &[f64; 3], s: S) -> Result<S::Ok, S::Error> {
+        serde::Serialize::serialize(&super::PoseJson::of(*p), s)
+    }
+    pub fn deserialize<'de, D: serde::Deserializer<'de>>(d: D) -> Result<[f64; 3], D::Error> {
+        <super::PoseJson as serde::Deserialize>::deserialize(d).map(super::PoseJson::get)
+    }
+}
+
+/// Serde of an optional `[x, y]` field as [`PointJson`] or `null`.
+mod point_field {
+    pub fn serialize<S: serde::Serializer>(p: &Option<[f64; 2]>, s: S) -> Result<S::Ok, S::Error> {
+        serde::Serialize::serialize(&p.map(super::PointJson::of), s)
+    }
+    pub fn deserialize<'de, D: serde::Deserializer<'de>>(
+        d: D,
+    ) -> Result<Option<[f64; 2]>, D::Error> {
+        <Option<super::PointJson> as serde::Deserialize>::deserialize(d)
+            .map(|p| p.map(super::PointJson::get))
+    }
+}
+
 fn json_of<T: Serialize>(v: &T) -> String {
     serde_json::to_string(v).expect("plain data serialises")
 }
@@ -72,8 +149,14 @@ impl<C: Serialize + DeserializeOwned> RunSettings<C> {
     pub fn to_metadata(&self) -> BTreeMap<String, String> {
         let p = self.start;
         BTreeMap::from([
-            ("start".into(), json_of(&[p.x_m, p.y_m, p.theta_rad])),
-            ("goal".into(), json_of(&[self.goal.x_m(), self.goal.y_m()])),
+            (
+                "start".into(),
+                json_of(&PoseJson::of([p.x_m, p.y_m, p.theta_rad])),
+            ),
+            (
+                "goal".into(),
+                json_of(&PointJson::of([self.goal.x_m(), self.goal.y_m()])),
+            ),
             ("config".into(), json_of(&self.config)),
             ("world".into(), json_of(&self.world)),
             ("sensor".into(), json_of(&self.sensor)),
@@ -84,8 +167,8 @@ impl<C: Serialize + DeserializeOwned> RunSettings<C> {
 
     /// Reads the settings back from [`RunSettings::to_metadata`] (the tuning unvalidated).
     pub fn from_metadata(m: &BTreeMap<String, String>) -> Result<Self, LogError> {
-        let [x_m, y_m, theta_rad]: [f64; 3] = json_field(m, "start")?;
-        let [gx, gy]: [f64; 2] = json_field(m, "goal")?;
+        let [x_m, y_m, theta_rad] = json_field::<PoseJson>(m, "start")?.get();
+        let [gx, gy] = json_field::<PointJson>(m, "goal")?.get();
         Ok(Self {
             start: Pose2 {
                 x_m,
@@ -119,11 +202,15 @@ impl<C: Serialize + DeserializeOwned> RunSettings<C> {
 pub struct LegSummary {
     /// Leg number (0 = start).
     pub leg: usize,
-    /// Estimate at the end of the leg: x, y, theta (rad).
+    /// Estimate at the end of the leg: x, y (m), heading (rad); `{x_m, y_m, heading_rad}` in
+    /// the metadata.
+    #[serde(with = "pose_field")]
     pub estimate: [f64; 3],
-    /// The landmark the leg localised on (world frame by the estimate).
+    /// The landmark the leg localised on (world frame by the estimate), `{x_m, y_m}`.
+    #[serde(with = "point_field")]
     pub landmark: Option<[f64; 2]>,
-    /// Point B of the leg.
+    /// Point B of the leg, `{x_m, y_m}`.
+    #[serde(with = "point_field")]
     pub point_b: Option<[f64; 2]>,
 }
 
@@ -131,7 +218,7 @@ pub struct LegSummary {
 pub fn legs_metadata(legs: &[LegSummary], reason: &str) -> BTreeMap<String, String> {
     BTreeMap::from([
         ("legs".to_string(), json_of(&legs)),
-        ("reason".to_string(), reason.to_string()),
+        ("reason".to_string(), json_of(&reason)),
     ])
 }
 
@@ -196,5 +283,9 @@ pub fn read_recorded_legs(path: &Path) -> Result<Option<(String, Vec<LegSummary>
         context: format!("{}: '{LEGS_METADATA}' legs", path.display()),
         source: Some(e),
     })?;
-    Ok(Some((m.get("reason").cloned().unwrap_or_default(), legs)))
+    // JSON text; recordings before it was quoted hold the bare word.
+    let reason = m.get("reason").map_or_else(String::new, |r| {
+        serde_json::from_str::<String>(r).unwrap_or_else(|_| r.clone())
+    });
+    Ok(Some((reason, legs)))
 }

@@ -205,7 +205,7 @@ fn the_file_has_the_summary_foxglove_seeks_with() {
     );
     let mut topics: Vec<_> = summary.channels.values().map(|c| c.topic.clone()).collect();
     topics.sort();
-    assert_eq!(topics, ["/pose/estimated", "/pose/true", "/scan"]);
+    assert_eq!(topics, ["/pose_estimate", "/pose_truth", "/scan"]);
     let meta = read_mcap_metadata(&path).unwrap();
     assert_eq!(meta.len(), 1);
     assert_eq!(meta[0].0, "goalseek.run");

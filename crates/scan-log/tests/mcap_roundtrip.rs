@@ -160,13 +160,13 @@ fn foxglove_fields_are_there() {
     let v: serde_json::Value = serde_json::from_slice(&msgs[0].data).unwrap();
     assert_eq!(v["timestamp"]["sec"], 12);
     assert_eq!(v["timestamp"]["nsec"], 250_000_000);
-    assert_eq!(v["frame_id"], "world");
+    assert_eq!(v["frame_id"], "map");
     assert_eq!(v["start_angle"], -0.5);
     assert_eq!(v["end_angle"], 0.5);
     assert_eq!(v["ranges"], serde_json::json!([1.5, 4.0, 0.0]));
     assert_eq!(v["pose"]["position"]["x"], 1.0);
     assert!((v["pose"]["orientation"]["z"].as_f64().unwrap() - 0.25f64.sin()).abs() < 1e-15);
-    assert_eq!(msgs[1].channel.topic, "/pose/estimated");
+    assert_eq!(msgs[1].channel.topic, "/pose_estimate");
 }
 
 #[test]
@@ -295,4 +295,128 @@ fn every_message_matches_its_embedded_schema() {
     }
     assert!(checked >= 4, "{checked} messages");
     assert!(errors.is_empty(), "{errors:#?}");
+}
+
+/// A recording written before the keys named their units: poses on `/pose/estimated` and
+/// `/pose/true` in frame `world` with `goalseek.theta_rad`, metadata poses as bare arrays and
+/// the end reason as a bare word. It still reads, to the same values.
+#[test]
+fn recordings_with_the_old_names_still_read() {
+    let g = ScanGeometry::centred(5, 1.0, 0.0, 4.0).unwrap();
+    let data = scans(3, &g, 11);
+    let dir = tempfile::tempdir().unwrap();
+    let new = dir.path().join("new.mcap");
+    let mut rec = McapRecorder::create(&new).unwrap();
+    for (s, t, e) in &data {
+        rec.record_scan(&g, s, *t, *e).unwrap();
+    }
+    rec.finish().unwrap();
+    let bytes = std::fs::read(&new).unwrap();
+
+    // The same messages under the old names.
+    let old = dir.path().join("old.mcap");
+    let mut w = mcap::Writer::new(std::io::BufWriter::new(
+        std::fs::File::create(&old).unwrap(),
+    ))
+    .unwrap();
+    let mut channels = std::collections::BTreeMap::new();
+    for m in mcap::MessageStream::new(&bytes).unwrap() {
+        let m = m.unwrap();
+        let (topic, data) = match m.channel.topic.as_str() {
+            "/scan" => ("/scan", m.data.to_vec()),
+            t => {
+                let mut v: serde_json::Value = serde_json::from_slice(&m.data).unwrap();
+                v["frame_id"] = "world".into();
+                let extra = v["goalseek"].as_object_mut().unwrap();
+                let h = extra.remove("heading_rad").unwrap();
+                extra.insert("theta_rad".into(), h);
+                let old = if t == "/pose_truth" {
+                    "/pose/true"
+                } else {
+                    "/pose/estimated"
+                };
+                (old, serde_json::to_vec(&v).unwrap())
+            }
+        };
+        let schema = m.channel.schema.as_ref().unwrap();
+        let id = *channels.entry(topic).or_insert_with(|| {
+            let s = w
+                .add_schema(&schema.name, &schema.encoding, &schema.data)
+                .unwrap();
+            w.add_channel(s, topic, "json", &Default::default())
+                .unwrap()
+        });
+        let header = mcap::records::MessageHeader {
+            channel_id: id,
+            sequence: m.sequence,
+            log_time: m.log_time,
+            publish_time: m.publish_time,
+        };
+        w.write_to_known_channel(&header, &data).unwrap();
+    }
+    let run = std::collections::BTreeMap::from([
+        ("start".to_string(), "[1.5,-2.0,0.25]".to_string()),
+        ("goal".to_string(), "[4.0,4.0]".to_string()),
+        ("config".to_string(), "{}".to_string()),
+        ("world".to_string(), "\"paper\"".to_string()),
+        ("sensor".to_string(), "\"paper\"".to_string()),
+        ("seed".to_string(), "3".to_string()),
+        ("noise".to_string(), "true".to_string()),
+    ]);
+    w.write_metadata(&mcap::records::Metadata {
+        name: scan_log::RUN_METADATA.into(),
+        metadata: run,
+    })
+    .unwrap();
+    let legs = std::collections::BTreeMap::from([
+        (
+            "legs".to_string(),
+            r#"[{"leg":0,"estimate":[1.5,-2.0,0.25],"landmark":null,"point_b":[3.0,1.0]}]"#
+                .to_string(),
+        ),
+        ("reason".to_string(), "reached".to_string()),
+    ]);
+    w.write_metadata(&mcap::records::Metadata {
+        name: scan_log::LEGS_METADATA.into(),
+        metadata: legs,
+    })
+    .unwrap();
+    w.finish().unwrap();
+    drop(w);
+
+    let got: Vec<_> = read_mcap(&old)
+        .unwrap()
+        .into_iter()
+        .map(|r| r.unwrap())
+        .collect();
+    assert_eq!(got.len(), data.len());
+    for (r, (_, t, e)) in got.iter().zip(&data) {
+        assert_eq!(r.true_pose, *t);
+        assert_eq!(r.pose, *e);
+    }
+    let s = scan_log::RunSettings::<serde_json::Value>::read(&old).unwrap();
+    assert_eq!(
+        (s.start.x_m, s.start.y_m, s.start.theta_rad),
+        (1.5, -2.0, 0.25)
+    );
+    assert_eq!((s.goal.x_m(), s.goal.y_m()), (4.0, 4.0));
+    let (reason, legs) = scan_log::read_recorded_legs(&old).unwrap().unwrap();
+    assert_eq!(reason, "reached");
+    assert_eq!(legs[0].estimate, [1.5, -2.0, 0.25]);
+    assert_eq!(legs[0].landmark, None);
+    assert_eq!(legs[0].point_b, Some([3.0, 1.0]));
+
+    // The new names: the metadata as objects with unit-named fields, the reason as JSON text.
+    let m = scan_log::legs_metadata(&legs, "reached");
+    assert_eq!(m["reason"], "\"reached\"");
+    assert_eq!(
+        m["legs"],
+        r#"[{"leg":0,"estimate":{"x_m":1.5,"y_m":-2.0,"heading_rad":0.25},"landmark":null,"point_b":{"x_m":3.0,"y_m":1.0}}]"#
+    );
+    let again = s.to_metadata();
+    assert_eq!(
+        again["start"],
+        r#"{"x_m":1.5,"y_m":-2.0,"heading_rad":0.25}"#
+    );
+    assert_eq!(again["goal"], r#"{"x_m":4.0,"y_m":4.0}"#);
 }

@@ -54,9 +54,9 @@ pub struct SlamReport {
     /// Straight-line distance between the first and the last placed pose, metres.
     pub start_to_end_m: f64,
     /// Length of the estimated path, metres.
-    pub path_length_m: f64,
+    pub estimated_path_length_m: f64,
     /// Share of the map's hit endpoints within one cell of an occupied cell.
-    pub map_consistency: f64,
+    pub map_consistency_share: f64,
     /// Against the log's reference poses, when every placed scan has one.
     pub evaluation: Option<Evaluation>,
     /// Loop closure, when it ran (`None`: the front end alone).
@@ -212,11 +212,11 @@ impl LogRun {
                 (Some(a), Some(b)) => a.pose.position().distance_m(&b.pose.position()),
                 _ => 0.0,
             },
-            path_length_m: placed
+            estimated_path_length_m: placed
                 .windows(2)
                 .map(|w| w[0].pose.position().distance_m(&w[1].pose.position()))
                 .sum(),
-            map_consistency: 0.0,
+            map_consistency_share: 0.0,
             evaluation: evaluate(&placed),
             loop_closure,
             loop_params: None,
@@ -241,7 +241,7 @@ impl SlamRun {
             .collect();
         let (grid, stats) =
             localiser::build_map(&self.geometry, &scans, resolution_m, max_range_m, false);
-        self.report.map_consistency = stats.endpoint_fit();
+        self.report.map_consistency_share = stats.endpoint_fit();
         grid
     }
 }

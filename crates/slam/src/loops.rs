@@ -143,6 +143,16 @@ pub struct LoopReport {
     pub optimisations: usize,
 }
 
+/// Writes `[x, y, heading rad]` as the report's `{x_m, y_m, heading_deg}`.
+fn pose_report<S: serde::Serializer>(p: &[f64; 3], s: S) -> Result<S::Ok, S::Error> {
+    use serde::ser::SerializeStruct;
+    let mut o = s.serialize_struct("Pose", 3)?;
+    o.serialize_field("x_m", &p[0])?;
+    o.serialize_field("y_m", &p[1])?;
+    o.serialize_field("heading_deg", &p[2].to_degrees())?;
+    o.end()
+}
+
 /// One loop closure.
 #[derive(Debug, Clone, Copy, Serialize)]
 pub struct Closure {
@@ -153,7 +163,8 @@ pub struct Closure {
     /// The match's field score.
     pub quality: f64,
     /// The measured pose of the newer scan in the frame of the older: x, y (metres), heading
-    /// (radians).
+    /// (radians); `slam.json` writes it as `{x_m, y_m, heading_deg}`.
+    #[serde(serialize_with = "pose_report")]
     pub measured: [f64; 3],
     /// Kept by the optimised graph.
     pub accepted: bool,

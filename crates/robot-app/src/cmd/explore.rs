@@ -49,8 +49,8 @@ pub struct ExploreArgs {
 /// One frontier tried, as `explore.json` lists it.
 #[derive(Debug, Clone, Serialize)]
 pub struct GoalRecord {
-    /// The frontier's target `[x, y]`, metres.
-    pub target: [f64; 2],
+    /// The frontier's target.
+    pub target: crate::outputs::PointOut,
     /// How the run to it ended.
     pub reason: Reason,
     /// Legs driven toward it.
@@ -78,14 +78,14 @@ pub struct ExploreSummary {
     pub scans: usize,
     /// Collisions the simulator recorded (0 on a real robot).
     pub collisions: usize,
-    /// Distance commanded, metres.
-    pub path_length_m: f64,
+    /// Distance commanded, metres: the sum of the forward moves sent.
+    pub commanded_path_length_m: f64,
     /// Distance truly driven, metres (simulator).
     pub true_path_length_m: Option<f64>,
     /// Share of the reachable free space (eroded by the robot radius) the map marks free.
-    pub coverage: Option<f64>,
+    pub coverage_share: Option<f64>,
     /// Share of the map's occupied cells within 1.5 cells of a true obstacle.
-    pub map_accuracy: Option<f64>,
+    pub map_accuracy_share: Option<f64>,
     /// Distance between the final estimate and the true position, metres (simulator).
     pub final_position_error_m: Option<f64>,
     /// RMS of the position error at every leg end, metres (simulator).
@@ -96,8 +96,8 @@ pub struct ExploreSummary {
     pub method: String,
     /// Noise seed (simulator).
     pub seed: Option<u64>,
-    /// Start pose `[x, y, theta_deg]`.
-    pub start: [f64; 3],
+    /// Start pose.
+    pub start: crate::outputs::PoseOut,
 }
 
 /// Coverage and map accuracy of `grid` (in the world's frame) against the true `world`.
@@ -189,8 +189,8 @@ pub fn run(args: ExploreArgs) -> anyhow::Result<()> {
             summary.goals_tried,
             summary.goals_reached,
             summary.legs,
-            pct(summary.coverage),
-            pct(summary.map_accuracy),
+            pct(summary.coverage_share),
+            pct(summary.map_accuracy_share),
             summary.collisions,
             summary
                 .final_position_error_m
@@ -248,7 +248,7 @@ fn summary_of(
             .goals
             .iter()
             .map(|g| GoalRecord {
-                target: [g.target.x_m(), g.target.y_m()],
+                target: crate::outputs::PointOut::of(g.target),
                 reason: g.reason,
                 legs: g.legs,
             })
@@ -256,10 +256,10 @@ fn summary_of(
         legs: ex.outcome.legs_driven,
         scans: ex.outcome.scans,
         collisions,
-        path_length_m: ex.outcome.path_length_m,
+        commanded_path_length_m: ex.outcome.path_length_m,
         true_path_length_m: truth.map(|t| t.travelled_m),
-        coverage,
-        map_accuracy,
+        coverage_share: coverage,
+        map_accuracy_share: map_accuracy,
         final_position_error_m: truth.map(|t| {
             ex.outcome
                 .estimate
@@ -270,7 +270,7 @@ fn summary_of(
         cpu_time_s,
         method: config.method.to_string(),
         seed,
-        start: pose_deg(&start),
+        start: crate::outputs::PoseOut::of(&start),
     }
 }
 
@@ -507,10 +507,6 @@ fn explore_robot(
     })
 }
 
-fn pose_deg(p: &Pose2) -> [f64; 3] {
-    [p.x_m, p.y_m, p.theta_rad.to_degrees()]
-}
-
 /// Writes `explore.json`, `trajectory.csv`, the TUM files, the maps and the run's figure.
 fn write_outputs(
     dir: &std::path::Path,
@@ -532,7 +528,7 @@ fn write_outputs(
         .seed
         .map_or(String::new(), |s| format!(", seed {s}"));
     let coverage = summary
-        .coverage
+        .coverage_share
         .map_or(String::new(), |c| format!(", coverage {:.0} %", 100.0 * c));
     let title = format!(
         "explore — {world}{seed}: {} frontiers{coverage}",

@@ -7,7 +7,7 @@ use clap::Args;
 use scan_types::{LaserSource, Pose2, Scan, WorldPoint};
 
 use super::sim::thread_cpu_time_s;
-use crate::outputs::{Reason, Summary};
+use crate::outputs::{PointOut, PoseOut, Reason, Summary};
 use crate::runloop::run_loop_legs;
 
 /// Arguments of `robot-app run`.
@@ -56,12 +56,16 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
     let mut laser = super::open_sensor(&args.port, urg_driver::UrgConfig::default())?;
     tracing::info!(port = %args.port, rays = laser.geometry().ray_count, "sensor connected");
     let geometry = *laser.geometry();
+    let scan_period_s = laser
+        .urg_mut()
+        .map(|u| u.params().scan_period().as_secs_f64());
     let mut recorder = args
         .options
         .record
         .as_deref()
         .map(|p| {
             crate::record::Recorder::create_profile(p, &geometry, args.options.profile)
+                .map(|r| r.with_scan_period(scan_period_s))
                 .with_context(|| format!("cannot record to {}", p.display()))
         })
         .transpose()?;
@@ -149,7 +153,6 @@ fn summary_of(
     (start, goal): (Pose2, WorldPoint),
     cpu_time_s: f64,
 ) -> Summary {
-    let deg = |p: &Pose2| [p.x_m, p.y_m, p.theta_rad.to_degrees()];
     let (position_sigma_m, heading_sigma_deg) = crate::outputs::leg_sigmas(outcome);
     Summary {
         reached: outcome.reason == Reason::Reached,
@@ -157,7 +160,7 @@ fn summary_of(
         legs: outcome.legs_driven,
         scans: outcome.scans,
         collisions: 0,
-        path_length_m: outcome.path_length_m,
+        commanded_path_length_m: outcome.path_length_m,
         true_path_length_m: None,
         geodesic_m: None,
         spl: None,
@@ -168,9 +171,9 @@ fn summary_of(
         cpu_time_s,
         method: config.method.to_string(),
         seed: None,
-        start: deg(&start),
-        goal: [goal.x_m(), goal.y_m()],
-        final_estimate: deg(&outcome.estimate),
+        start: PoseOut::of(&start),
+        goal: PointOut::of(goal),
+        final_estimate: PoseOut::of(&outcome.estimate),
         final_truth: None,
         note: outcome.note.clone(),
         narrow_passages: crate::outputs::narrow_passages(outcome),

@@ -84,7 +84,12 @@ pub fn run_to<W: Write>(args: &ScanArgs, out: &mut W) -> anyhow::Result<()> {
             args.seed,
             args.noise.is_on(),
         )?;
-        return print_scans(&mut source, args, out);
+        let period_s = args
+            .sensor
+            .parse::<sim_laser::SensorPreset>()
+            .ok()
+            .map(|s| s.scan_period_s());
+        return print_scans(&mut source, period_s, args, out);
     }
     let port = args
         .port
@@ -99,7 +104,10 @@ pub fn run_to<W: Write>(args: &ScanArgs, out: &mut W) -> anyhow::Result<()> {
         ..UrgConfig::default()
     };
     let mut urg = super::open_sensor(port, config)?;
-    let printed = print_scans(&mut urg, args, out);
+    let period_s = urg
+        .urg_mut()
+        .map(|u| u.params().scan_period().as_secs_f64());
+    let printed = print_scans(&mut urg, period_s, args, out);
     let stopped = match urg.urg_mut() {
         Some(u) => {
             let stats = u.stats();
@@ -120,9 +128,11 @@ pub fn run_to<W: Write>(args: &ScanArgs, out: &mut W) -> anyhow::Result<()> {
 }
 
 /// Prints `args.count` scans of `source` (fewer when a stop is asked for), recording them to
-/// `args.record`; the recording is finished whatever happens.
+/// `args.record` (ROS 2 scan times from `scan_period_s`); the recording is finished whatever
+/// happens.
 fn print_scans<S: LaserSource, W: Write>(
     source: &mut S,
+    scan_period_s: Option<f64>,
     args: &ScanArgs,
     out: &mut W,
 ) -> anyhow::Result<()> {
@@ -144,7 +154,8 @@ fn print_scans<S: LaserSource, W: Write>(
                 let r = match &mut recorder {
                     Some(r) => r,
                     None => {
-                        recorder.insert(Recorder::create_profile(path, &geometry, args.profile)?)
+                        let r = Recorder::create_profile(path, &geometry, args.profile)?;
+                        recorder.insert(r.with_scan_period(scan_period_s))
                     }
                 };
                 r.write(&scan)?;

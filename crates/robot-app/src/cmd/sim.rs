@@ -8,7 +8,7 @@ use scan_types::{Pose2, WorldPoint};
 use sim_laser::{GeodesicMap, SensorPreset, SimSetup, paper_start, paper_target};
 
 use crate::config::Params;
-use crate::outputs::{Reason, Summary, spl, write_summary};
+use crate::outputs::{PointOut, PoseOut, Reason, Summary, spl, write_summary};
 use crate::runloop::run_loop_legs;
 use scan_log::write_trajectory;
 
@@ -118,10 +118,6 @@ pub fn thread_cpu_time_s() -> f64 {
         .ok()
         .and_then(|s| s.split_whitespace().next()?.parse::<f64>().ok())
         .map_or(0.0, |ns| ns * 1e-9)
-}
-
-fn pose_deg(p: &Pose2) -> [f64; 3] {
-    [p.x_m, p.y_m, p.theta_rad.to_degrees()]
 }
 
 /// Called with every scan of a simulated run, its true pose and the navigator's estimate.
@@ -242,7 +238,7 @@ fn simulate_inner(
         legs: outcome.legs_driven,
         scans: outcome.scans,
         collisions,
-        path_length_m: outcome.path_length_m,
+        commanded_path_length_m: outcome.path_length_m,
         true_path_length_m: Some(travelled),
         geodesic_m,
         spl: geodesic_m.map(|l| spl(reached, l, travelled)),
@@ -253,10 +249,10 @@ fn simulate_inner(
         cpu_time_s: cpu,
         method: spec.config.method.to_string(),
         seed: Some(spec.setup.seed),
-        start: pose_deg(&spec.setup.start),
-        goal: [spec.goal.x_m(), spec.goal.y_m()],
-        final_estimate: pose_deg(&outcome.estimate),
-        final_truth: Some(pose_deg(&t)),
+        start: PoseOut::of(&spec.setup.start),
+        goal: PointOut::of(spec.goal),
+        final_estimate: PoseOut::of(&outcome.estimate),
+        final_truth: Some(PoseOut::of(&t)),
         note,
         narrow_passages: crate::outputs::narrow_passages(outcome),
         position_sigma_m,
@@ -402,7 +398,8 @@ pub fn run_with(
     let setup = &spec.setup;
     let geometry = setup.sensor.geometry();
     let mut recorder = crate::record::Recorder::create_profile(path, &geometry, profile)
-        .with_context(|| format!("cannot record to {}", path.display()))?;
+        .with_context(|| format!("cannot record to {}", path.display()))?
+        .with_scan_period(Some(setup.sensor.scan_period_s()));
     let settings = crate::record::RunSettings {
         start: setup.start,
         goal: spec.goal,

@@ -235,7 +235,7 @@ pub fn run(args: SlamArgs) -> anyhow::Result<()> {
             r.scans,
             r.skipped.len(),
             r.time_per_scan_ms[0],
-            100.0 * r.map_consistency,
+            100.0 * r.map_consistency_share,
             r.start_to_end_m,
             args.out.display()
         );

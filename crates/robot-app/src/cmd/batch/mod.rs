@@ -236,7 +236,7 @@ fn row_of(job: &Job, run: SimRun) -> BatchRow {
         final_heading_error_deg: s.final_heading_error_deg,
         ate_rmse_m: s.ate_rmse_m,
         goal_distance_m: s.goal_distance_m,
-        path_length_m: s.path_length_m,
+        commanded_path_length_m: s.commanded_path_length_m,
         true_path_length_m: s.true_path_length_m,
         geodesic_m: s.geodesic_m,
         spl: s.spl,

@@ -21,10 +21,10 @@ pub struct BatchRow {
     pub method: String,
     /// Seed.
     pub seed: u64,
-    /// Start `[x, y, theta_deg]`.
-    pub start: [f64; 3],
-    /// Target `[x, y]`.
-    pub goal: [f64; 2],
+    /// Start pose.
+    pub start: crate::outputs::PoseOut,
+    /// Target.
+    pub goal: crate::outputs::PointOut,
     /// Success: true position within 0.3 m of the target, no collision.
     pub reached: bool,
     /// Why the run ended.
@@ -44,7 +44,7 @@ pub struct BatchRow {
     /// True distance to the target at the end, metres.
     pub goal_distance_m: Option<f64>,
     /// Distance commanded, metres.
-    pub path_length_m: f64,
+    pub commanded_path_length_m: f64,
     /// Distance truly driven, metres.
     pub true_path_length_m: Option<f64>,
     /// Shortest free path from start to target, metres (`null`: none found).
@@ -72,8 +72,8 @@ pub struct Aggregate {
     pub runs: usize,
     /// Successful runs.
     pub reached: usize,
-    /// Success rate, percent.
-    pub success_pct: f64,
+    /// Share of the runs that succeeded, 0 to 1.
+    pub success_share: f64,
     /// SPL: the mean of the runs' SPL over the runs with a geodesic (`null` if none has one).
     pub spl: Option<f64>,
     /// Runs with a geodesic, the ones `spl` averages.
@@ -127,10 +127,10 @@ pub fn aggregate(rows: &[BatchRow]) -> Vec<Aggregate> {
             Aggregate {
                 runs,
                 reached,
-                success_pct: if runs == 0 {
+                success_share: if runs == 0 {
                     0.0
                 } else {
-                    100.0 * reached as f64 / runs as f64
+                    reached as f64 / runs as f64
                 },
                 spl: (!spls.is_empty()).then(|| spls.iter().sum::<f64>() / spls.len() as f64),
                 spl_runs: spls.len(),
@@ -164,8 +164,8 @@ pub fn table(aggs: &[Aggregate]) -> String {
         "SPL",
         "coll.",
         "med.err m",
-        "p90 err",
-        "med.ATE",
+        "p90 err m",
+        "med.ATE m",
         "legs",
         "cpu s"
     );
@@ -173,12 +173,12 @@ pub fn table(aggs: &[Aggregate]) -> String {
         let reasons: Vec<String> = a.reasons.iter().map(|(k, v)| format!("{k}:{v}")).collect();
         let _ = writeln!(
             s,
-            "{:<20} {:<8} {:<9} {:>5} {:>7.1}% {:>6} {:>6} {:>10.3} {:>9.3} {:>9.3} {:>6.0} {:>8.3}  {}",
+            "{:<20} {:<8} {:<9} {:>5} {:>7.1}% {:>6} {:>6} {:>10.3} {:>9.3} {:>9.3} {:>6.1} {:>8.3}  {}",
             a.group,
             a.kind,
             a.method,
             a.runs,
-            a.success_pct,
+            100.0 * a.success_share,
             a.spl.map_or_else(|| "-".into(), |v| format!("{v:.3}")),
             a.runs_with_collision,
             a.median_final_error_m,
