@@ -34,6 +34,12 @@ pub struct FrontEndParams {
     pub local_shift_m: f64,
     /// ... and turned at most this from it, degrees.
     pub local_turn_deg: f64,
+    /// Half-width of a first, narrow correlative search around the constant-velocity
+    /// prediction, metres (0: none); its pose is kept, without the wide search, unless it lies
+    /// on the narrow window's edge ...
+    pub narrow_window_m: f64,
+    /// ... and the narrow search's half-width in rotation, degrees.
+    pub narrow_window_deg: f64,
     /// Quality lost per square metre of the pose away from the prediction (keeps a corridor's
     /// scan where the motion puts it).
     pub translation_cost: f64,
@@ -84,6 +90,8 @@ impl Default for FrontEndParams {
             local_quality: 1.0,
             local_shift_m: 0.1,
             local_turn_deg: 3.0,
+            narrow_window_m: 0.3,
+            narrow_window_deg: 10.0,
             translation_cost: 0.1,
             rotation_cost: 0.1,
             depth: 4,
@@ -131,6 +139,8 @@ impl FrontEndParams {
                 ("icp_surface_spacings", self.icp_surface_spacings),
                 ("local_shift_m", self.local_shift_m),
                 ("local_turn_deg", self.local_turn_deg),
+                ("narrow_window_m", self.narrow_window_m),
+                ("narrow_window_deg", self.narrow_window_deg),
             ],
             |v| v.is_finite() && v >= 0.0,
             "must be a number >= 0",
@@ -185,7 +195,8 @@ pub enum Placement {
         sigma_m: Option<f64>,
         /// True when the scan became a keyframe of the submap.
         keyframe: bool,
-        /// True when the wide search placed it (false: ICP from the prediction).
+        /// True when the wide search placed it (false: the narrow search or ICP from the
+        /// prediction).
         wide: bool,
     },
     /// The scan could not be placed and was left out.
@@ -220,8 +231,8 @@ impl std::fmt::Display for SkipReason {
 #[derive(Debug, Clone)]
 struct Keyframe {
     pose: Pose2,
-    geometry: ScanGeometry,
-    scan: Scan,
+    /// The refinement's reference points of the scan, in its own frame (fitted once).
+    target: Option<MatchTarget>,
     /// Thinned hits, world frame.
     points: Vec<[f64; 2]>,
 }
@@ -363,31 +374,46 @@ impl FrontEnd {
                 wide: false,
             };
         }
-        let damped = Pose2::new(
-            step.x_m,
-            step.y_m,
-            step.theta_rad * self.params.rotation_prediction,
-        );
-        let centre = prediction.unwrap_or_else(|| last.compose(&damped));
-        let window = Window {
-            linear_m: self.params.linear_window_m,
-            angular_rad: self.params.angular_window_deg.to_radians(),
-            translation_cost: self.params.translation_cost,
-            rotation_cost: self.params.rotation_cost,
-        };
+        let p = &self.params;
         let grid = self
             .grid
             .as_ref()
             .expect("a submap exists once a scan is placed");
-        let Some(found) = search(grid, &points, &centre, &window, self.params.min_quality) else {
-            return Placement::Skipped {
-                reason: SkipReason::NoMatch,
-            };
+        let window = |linear_m: f64, angular_deg: f64| Window {
+            linear_m,
+            angular_rad: angular_deg.to_radians(),
+            translation_cost: p.translation_cost,
+            rotation_cost: p.rotation_cost,
+        };
+        // Fast scans: the best pose near the prediction, when it is not on the narrow
+        // window's edge.
+        let narrow = (p.narrow_window_m > 0.0 && p.narrow_window_deg > 0.0)
+            .then(|| {
+                let w = window(p.narrow_window_m, p.narrow_window_deg);
+                search(grid, &points, &guess, &w, p.min_quality)
+            })
+            .flatten()
+            .filter(|f| !f.on_edge);
+        let wide = narrow.is_none();
+        let found = match narrow {
+            Some(f) => f,
+            None => {
+                let damped = Pose2::new(step.x_m, step.y_m, step.theta_rad * p.rotation_prediction);
+                let centre = prediction.unwrap_or_else(|| last.compose(&damped));
+                let w = window(p.linear_window_m, p.angular_window_deg);
+                let Some(f) = search(grid, &points, &centre, &w, p.min_quality) else {
+                    return Placement::Skipped {
+                        reason: SkipReason::NoMatch,
+                    };
+                };
+                f
+            }
         };
         tracing::trace!(
-            dx = found.pose.x_m - centre.x_m,
-            dy = found.pose.y_m - centre.y_m,
+            dx = found.pose.x_m - guess.x_m,
+            dy = found.pose.y_m - guess.y_m,
             quality = found.quality,
+            wide,
             "correlative placement"
         );
         let (pose, sigma_m) = self.refine(geometry, scan, &points, found);
@@ -401,7 +427,7 @@ impl FrontEnd {
             refined: sigma_m.is_some(),
             sigma_m,
             keyframe,
-            wide: true,
+            wide,
         }
     }
 
@@ -498,10 +524,13 @@ impl FrontEnd {
                 ]
             })
             .collect();
+        let target = self
+            .params
+            .refine
+            .then(|| MatchTarget::from_scan(geometry, scan, &self.match_params));
         self.keyframes.push_back(Keyframe {
             pose,
-            geometry: *geometry,
-            scan: scan.clone(),
+            target,
             points: world,
         });
         while self.keyframes.len() > self.params.submap_keyframes {
@@ -518,8 +547,9 @@ impl FrontEnd {
         if p.refine {
             self.target = MatchTarget::new();
             for k in &self.keyframes {
-                self.target
-                    .add_scan(&k.pose, &k.geometry, &k.scan, &self.match_params);
+                if let Some(t) = &k.target {
+                    self.target.add_target(&k.pose, t);
+                }
             }
         }
     }
