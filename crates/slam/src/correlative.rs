@@ -316,7 +316,13 @@ mod tests {
         // window reaches), at every shift, angle and level.
         let grid = ScoreGrid::new(&ell(), 0.1, 0.1, 3, 5).unwrap();
         let mut scan = ell();
-        scan.extend([[-2.4, 0.3], [5.9, -1.7], [0.2, 6.3], [30.0, 2.0], [-1.0, -40.0]]);
+        scan.extend([
+            [-2.4, 0.3],
+            [5.9, -1.7],
+            [0.2, 6.3],
+            [30.0, 2.0],
+            [-1.0, -40.0],
+        ]);
         let guess = Pose2::new(0.2, -0.1, 0.1);
         let window = Window {
             linear_m: 0.5,

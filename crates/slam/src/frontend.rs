@@ -35,8 +35,9 @@ pub struct FrontEndParams {
     /// ... and turned at most this from it, degrees.
     pub local_turn_deg: f64,
     /// Half-width of a first, narrow correlative search around the constant-velocity
-    /// prediction, metres (0: none); its pose is kept, without the wide search, unless it lies
-    /// on the narrow window's edge ...
+    /// prediction, metres (0: none), tried when the last step moved at most half of it and
+    /// turned at most half of `narrow_window_deg`; its pose is kept, without the wide search,
+    /// unless it lies on the narrow window's edge ...
     pub narrow_window_m: f64,
     /// ... and the narrow search's half-width in rotation, degrees.
     pub narrow_window_deg: f64,
@@ -387,7 +388,9 @@ impl FrontEnd {
         };
         // Fast scans: the best pose near the prediction, when it is not on the narrow
         // window's edge.
-        let narrow = (p.narrow_window_m > 0.0 && p.narrow_window_deg > 0.0)
+        let slow = step.x_m.hypot(step.y_m) <= 0.5 * p.narrow_window_m
+            && step.theta_rad.abs() <= 0.5 * p.narrow_window_deg.to_radians();
+        let narrow = (p.narrow_window_m > 0.0 && p.narrow_window_deg > 0.0 && slow)
             .then(|| {
                 let w = window(p.narrow_window_m, p.narrow_window_deg);
                 search(grid, &points, &guess, &w, p.min_quality)

@@ -325,7 +325,10 @@ mod tests {
         let c = Pose2::new(0.3, 0.2, 2.0);
         let mut t = MatchTarget::new();
         for pose in [a, b] {
-            t.add_target(&pose, &MatchTarget::from_scan(&g, &cast(&room(), pose, None), &p));
+            t.add_target(
+                &pose,
+                &MatchTarget::from_scan(&g, &cast(&room(), pose, None), &p),
+            );
         }
         let guess = Pose2::new(0.36, 0.16, 2.02);
         let m = t.align(&g, &cast(&room(), c, None), guess, &p).unwrap();
