@@ -78,6 +78,8 @@ pub struct FrontEndParams {
     /// A refinement whose field score falls more than this below the correlative pose's is
     /// refused.
     pub max_refine_loss: f64,
+    /// The refinement fits every this-many-th hit of the scan (1: all).
+    pub icp_stride: usize,
 }
 
 impl Default for FrontEndParams {
@@ -109,6 +111,7 @@ impl Default for FrontEndParams {
             icp_surface_m: 0.3,
             icp_surface_spacings: 3.0,
             max_refine_loss: 0.05,
+            icp_stride: 2,
         }
     }
 }
@@ -171,6 +174,9 @@ impl FrontEndParams {
         }
         if self.depth > 10 {
             return Err(bad("depth", self.depth as f64, "must be at most 10"));
+        }
+        if self.icp_stride == 0 {
+            return Err(bad("icp_stride", 0.0, "must be at least 1"));
         }
         if self.submap_keyframes == 0 {
             return Err(bad("submap_keyframes", 0.0, "must be at least 1"));
@@ -257,6 +263,7 @@ impl FrontEnd {
         params.validate()?;
         let surface_m = params.icp_surface_m;
         let surface_spacings = params.icp_surface_spacings;
+        let stride = params.icp_stride;
         Ok(Self {
             params,
             // Real scans with 1 deg rays: neighbouring hits of one wall lie far apart at range.
@@ -266,6 +273,7 @@ impl FrontEnd {
                 surface_spacings,
                 normal_half_length_m: surface_m * 0.6,
                 min_pairs: 30,
+                stride,
                 ..MatchParams::default()
             },
             keyframes: VecDeque::new(),
