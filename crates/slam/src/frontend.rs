@@ -1,5 +1,6 @@
-//! The front end: each scan placed against a local submap of recent keyframes, by a wide
-//! correlative search around a constant-velocity prediction, refined by point-to-line ICP.
+//! The front end: each scan placed against a local submap of recent keyframes, by a narrow
+//! then a wide correlative search around a constant-velocity prediction, refined by
+//! point-to-line ICP.
 
 use std::collections::VecDeque;
 
