@@ -311,6 +311,30 @@ mod tests {
     }
 
     #[test]
+    fn a_best_pose_beyond_the_window_is_reported_on_its_edge() {
+        // The scan is the L seen from 0.5 m further along x: only that shift brings its
+        // y-wall onto the map's, and a shift toward it keeps more of its x-wall on the map's.
+        let map = ell();
+        let grid = ScoreGrid::new(&map, 0.1, 0.1, 4, 10).unwrap();
+        let scan: Vec<[f64; 2]> = map.iter().map(|p| [p[0] - 0.5, p[1]]).collect();
+        let window = |linear_m: f64| Window {
+            linear_m,
+            angular_rad: 5f64.to_radians(),
+            translation_cost: 0.0,
+            rotation_cost: 0.0,
+        };
+        let near = search(&grid, &scan, &Pose2::default(), &window(0.2), 0.0).unwrap();
+        assert!(near.on_edge, "{near:?}");
+        let wide = search(&grid, &scan, &Pose2::default(), &window(1.0), 0.0).unwrap();
+        assert!(!wide.on_edge, "{wide:?}");
+        // Within about a cell: points on a cell border score alike a cell either way.
+        assert!(
+            (wide.pose.x_m - 0.5).abs() <= 0.15 && wide.pose.y_m.abs() <= 0.15,
+            "{wide:?}"
+        );
+    }
+
+    #[test]
     fn scores_equal_direct_lookups_on_and_off_the_grid() {
         // Points on the L, beside it, and far beyond the grid's edge (which no shift of the
         // window reaches), at every shift, angle and level.
