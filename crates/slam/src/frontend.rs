@@ -36,7 +36,9 @@ pub struct FrontEndParams {
     /// ... and turned at most this from it, degrees.
     pub local_turn_deg: f64,
     /// Half-width of a first, narrow correlative search around the constant-velocity
-    /// prediction, metres (0: none), tried when the last step moved at most half of it and
+    /// prediction (not a caller's: [`FrontEnd::add_scan_near`] and
+    /// [`FrontEnd::locate_near`] search their window alone), metres (0: none), tried when the
+    /// last step moved at most half of it and
     /// turned at most half of `narrow_window_deg`; its pose is kept, without the wide search,
     /// unless it lies on the narrow window's edge ...
     pub narrow_window_m: f64,
@@ -399,13 +401,18 @@ impl FrontEnd {
         // window's edge.
         let slow = step.x_m.hypot(step.y_m) <= 0.5 * p.narrow_window_m
             && step.theta_rad.abs() <= 0.5 * p.narrow_window_deg.to_radians();
-        let narrow = (p.narrow_window_m > 0.0 && p.narrow_window_deg > 0.0 && slow)
-            .then(|| {
-                let w = window(p.narrow_window_m, p.narrow_window_deg);
-                search(grid, &points, &guess, &w, p.min_quality)
-            })
-            .flatten()
-            .filter(|f| !f.on_edge);
+        // Only for the constant-velocity model: a caller's prediction keeps its own window.
+        let narrow =
+            (prediction.is_none() && p.narrow_window_m > 0.0 && p.narrow_window_deg > 0.0 && slow)
+                .then(|| {
+                    let w = window(
+                        p.narrow_window_m.min(p.linear_window_m),
+                        p.narrow_window_deg.min(p.angular_window_deg),
+                    );
+                    search(grid, &points, &guess, &w, p.min_quality)
+                })
+                .flatten()
+                .filter(|f| !f.on_edge);
         let wide = narrow.is_none();
         let found = match narrow {
             Some(f) => f,
