@@ -23,6 +23,9 @@ pub(crate) struct Window {
 pub(crate) struct Found {
     pub(crate) pose: Pose2,
     pub(crate) quality: f64,
+    /// True when the pose lies on the window's outermost shift or angle (the best pose may
+    /// then lie beyond it).
+    pub(crate) on_edge: bool,
 }
 
 #[derive(Debug, Clone, Copy)]
@@ -39,16 +42,26 @@ struct Candidate {
 
 /// The points' cells for every angle of the window.
 struct Rotated {
-    /// Cells of all points, angle after angle.
-    cells: Vec<[i32; 2]>,
-    points: usize,
+    /// Per angle, the cell index (`y * width + x`) of every point that stays inside the grid
+    /// at every shift of the window ...
+    inner: Vec<Vec<usize>>,
+    /// ... and the cells of those that may leave it (read with a bounds check). Points that
+    /// lie outside at every shift score 0 and are left out.
+    edge: Vec<Vec<[i32; 2]>>,
+    width: i32,
     /// Heading of each angle, and its offset from the guess.
     thetas: Vec<f64>,
     offsets: Vec<f64>,
 }
 
 impl Rotated {
-    fn new(grid: &ScoreGrid, points: &[[f64; 2]], guess: &Pose2, window: &Window) -> Self {
+    fn new(
+        grid: &ScoreGrid,
+        points: &[[f64; 2]],
+        guess: &Pose2,
+        window: &Window,
+        half: i32,
+    ) -> Self {
         // The angular step moves most points (nine in ten) by at most about one cell; ICP
         // refines the angle afterwards.
         let mut ranges: Vec<f64> = points.iter().map(|p| p[0].hypot(p[1])).collect();
@@ -61,34 +74,58 @@ impl Rotated {
         .max(grid.resolution_m);
         let step = (grid.resolution_m / reach).min(window.angular_rad.max(1e-9));
         let n = (window.angular_rad / step).ceil() as i64;
-        let mut cells = Vec::with_capacity((2 * n as usize + 1) * points.len());
-        let mut thetas = Vec::with_capacity(2 * n as usize + 1);
-        let mut offsets = Vec::with_capacity(2 * n as usize + 1);
+        let [w, h] = grid.size().map(|v| v as i32);
+        let angles = 2 * n as usize + 1;
+        let mut inner = Vec::with_capacity(angles);
+        let mut edge = Vec::with_capacity(angles);
+        let mut thetas = Vec::with_capacity(angles);
+        let mut offsets = Vec::with_capacity(angles);
+        // Shifts reach `half` cells either way: a point at x is read from x - half to x + half.
+        let inside = |v: i32, size: i32| v >= half && v < size - half;
+        let never = |v: i32, size: i32| v < -half || v >= size + half;
         for a in -n..=n {
             let theta = guess.theta_rad + a as f64 * step;
             let (s, c) = theta.sin_cos();
             thetas.push(theta);
             offsets.push(a as f64 * step);
-            cells.extend(points.iter().map(|p| {
-                grid.cell([
+            let mut inn = Vec::with_capacity(points.len());
+            let mut edg = Vec::new();
+            for p in points {
+                let q = grid.cell([
                     guess.x_m + c * p[0] - s * p[1],
                     guess.y_m + s * p[0] + c * p[1],
-                ])
-            }));
+                ]);
+                if inside(q[0], w) && inside(q[1], h) {
+                    inn.push(q[1] as usize * w as usize + q[0] as usize);
+                } else if !(never(q[0], w) || never(q[1], h)) {
+                    edg.push(q);
+                }
+            }
+            inner.push(inn);
+            edge.push(edg);
         }
         Self {
-            cells,
-            points: points.len(),
+            inner,
+            edge,
+            width: w,
             thetas,
             offsets,
         }
     }
 
     fn raw(&self, grid: &ScoreGrid, c: &Candidate) -> u32 {
-        self.cells[c.angle * self.points..(c.angle + 1) * self.points]
+        let level = grid.level(c.level);
+        // A shift within the window keeps every inner cell on the grid.
+        let shift = (c.iy * self.width + c.ix) as isize;
+        let inner: u32 = self.inner[c.angle]
+            .iter()
+            .map(|&q| u32::from(level[(q as isize + shift) as usize]))
+            .sum();
+        let edge: u32 = self.edge[c.angle]
             .iter()
             .map(|q| grid.value(c.level, q[0] + c.ix, q[1] + c.iy))
-            .sum()
+            .sum();
+        inner + edge
     }
 }
 
@@ -130,10 +167,11 @@ pub(crate) fn search(
     }
     let full = FULL as f64 * points.len() as f64;
     let res = grid.resolution_m;
+    let half = (window.linear_m / res).ceil() as i32;
     let scorer = Scorer {
         grid,
-        rotated: Rotated::new(grid, points, guess, window),
-        half: (window.linear_m / res).ceil() as i32,
+        rotated: Rotated::new(grid, points, guess, window, half),
+        half,
         per_cell2: full * window.translation_cost * res * res,
         per_rad2: full * window.rotation_cost,
     };
@@ -162,6 +200,7 @@ pub(crate) fn search(
     branch(&scorer, roots, &mut best);
     let b = best?;
     let quality = b.raw as f64 / full;
+    let last = scorer.rotated.thetas.len() - 1;
     (quality >= min_quality).then(|| Found {
         pose: Pose2::new(
             guess.x_m + b.ix as f64 * res,
@@ -169,6 +208,9 @@ pub(crate) fn search(
             scorer.rotated.thetas[b.angle],
         ),
         quality,
+        on_edge: b.ix.abs() >= scorer.half
+            || b.iy.abs() >= scorer.half
+            || (last > 0 && (b.angle == 0 || b.angle == last)),
     })
 }
 
@@ -269,6 +311,81 @@ mod tests {
     }
 
     #[test]
+    fn a_best_pose_beyond_the_window_is_reported_on_its_edge() {
+        // The scan is the L seen from 0.5 m further along x: only that shift brings its
+        // y-wall onto the map's, and a shift toward it keeps more of its x-wall on the map's.
+        let map = ell();
+        let grid = ScoreGrid::new(&map, 0.1, 0.1, 4, 10).unwrap();
+        let scan: Vec<[f64; 2]> = map.iter().map(|p| [p[0] - 0.5, p[1]]).collect();
+        let window = |linear_m: f64| Window {
+            linear_m,
+            angular_rad: 5f64.to_radians(),
+            translation_cost: 0.0,
+            rotation_cost: 0.0,
+        };
+        let near = search(&grid, &scan, &Pose2::default(), &window(0.2), 0.0).unwrap();
+        assert!(near.on_edge, "{near:?}");
+        let wide = search(&grid, &scan, &Pose2::default(), &window(1.0), 0.0).unwrap();
+        assert!(!wide.on_edge, "{wide:?}");
+        // Within about a cell: points on a cell border score alike a cell either way.
+        assert!(
+            (wide.pose.x_m - 0.5).abs() <= 0.15 && wide.pose.y_m.abs() <= 0.15,
+            "{wide:?}"
+        );
+    }
+
+    #[test]
+    fn scores_equal_direct_lookups_on_and_off_the_grid() {
+        // Points on the L, beside it, and far beyond the grid's edge (which no shift of the
+        // window reaches), at every shift, angle and level.
+        let grid = ScoreGrid::new(&ell(), 0.1, 0.1, 3, 5).unwrap();
+        let mut scan = ell();
+        scan.extend([
+            [-2.4, 0.3],
+            [5.9, -1.7],
+            [0.2, 6.3],
+            [30.0, 2.0],
+            [-1.0, -40.0],
+        ]);
+        let guess = Pose2::new(0.2, -0.1, 0.1);
+        let window = Window {
+            linear_m: 0.5,
+            angular_rad: 4f64.to_radians(),
+            translation_cost: 0.0,
+            rotation_cost: 0.0,
+        };
+        let rotated = Rotated::new(&grid, &scan, &guess, &window, 5);
+        for (angle, theta) in rotated.thetas.iter().enumerate() {
+            let (s, c) = theta.sin_cos();
+            for level in 0..=grid.depth() {
+                for ix in -5..=5 {
+                    for iy in -5..=5 {
+                        let want: u32 = scan
+                            .iter()
+                            .map(|p| {
+                                let q = grid.cell([
+                                    guess.x_m + c * p[0] - s * p[1],
+                                    guess.y_m + s * p[0] + c * p[1],
+                                ]);
+                                grid.value(level, q[0] + ix, q[1] + iy)
+                            })
+                            .sum();
+                        let cand = Candidate {
+                            score: 0,
+                            raw: 0,
+                            angle,
+                            ix,
+                            iy,
+                            level,
+                        };
+                        assert_eq!(rotated.raw(&grid, &cand), want, "{angle} {level} {ix} {iy}");
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
     fn branch_and_bound_agrees_with_exhaustive_search() {
         let map = ell();
         let grid = ScoreGrid::new(&map, 0.1, 0.1, 4, 11).unwrap();
@@ -289,7 +406,7 @@ mod tests {
             let full = FULL as f64 * scan.len() as f64;
             let scorer = Scorer {
                 grid: &grid,
-                rotated: Rotated::new(&grid, &scan, &guess, &window),
+                rotated: Rotated::new(&grid, &scan, &guess, &window, 10),
                 half: 10,
                 per_cell2: full * tc * 0.01,
                 per_rad2: full * rc,

@@ -1,5 +1,6 @@
-//! The front end: each scan placed against a local submap of recent keyframes, by a wide
-//! correlative search around a constant-velocity prediction, refined by point-to-line ICP.
+//! The front end: each scan placed against a local submap of recent keyframes, by a narrow
+//! then a wide correlative search around a constant-velocity prediction, refined by
+//! point-to-line ICP.
 
 use std::collections::VecDeque;
 
@@ -34,6 +35,15 @@ pub struct FrontEndParams {
     pub local_shift_m: f64,
     /// ... and turned at most this from it, degrees.
     pub local_turn_deg: f64,
+    /// Half-width of a first, narrow correlative search around the constant-velocity
+    /// prediction (not a caller's: [`FrontEnd::add_scan_near`] and
+    /// [`FrontEnd::locate_near`] search their window alone), metres (0: none), tried when the
+    /// last step moved at most half of it and
+    /// turned at most half of `narrow_window_deg`; its pose is kept, without the wide search,
+    /// unless it lies on the narrow window's edge ...
+    pub narrow_window_m: f64,
+    /// ... and the narrow search's half-width in rotation, degrees.
+    pub narrow_window_deg: f64,
     /// Quality lost per square metre of the pose away from the prediction (keeps a corridor's
     /// scan where the motion puts it).
     pub translation_cost: f64,
@@ -71,6 +81,8 @@ pub struct FrontEndParams {
     /// A refinement whose field score falls more than this below the correlative pose's is
     /// refused.
     pub max_refine_loss: f64,
+    /// The refinement fits every this-many-th hit of the scan (1: all).
+    pub icp_stride: usize,
 }
 
 impl Default for FrontEndParams {
@@ -84,6 +96,8 @@ impl Default for FrontEndParams {
             local_quality: 1.0,
             local_shift_m: 0.1,
             local_turn_deg: 3.0,
+            narrow_window_m: 0.3,
+            narrow_window_deg: 10.0,
             translation_cost: 0.1,
             rotation_cost: 0.1,
             depth: 4,
@@ -100,6 +114,7 @@ impl Default for FrontEndParams {
             icp_surface_m: 0.3,
             icp_surface_spacings: 3.0,
             max_refine_loss: 0.05,
+            icp_stride: 2,
         }
     }
 }
@@ -131,6 +146,8 @@ impl FrontEndParams {
                 ("icp_surface_spacings", self.icp_surface_spacings),
                 ("local_shift_m", self.local_shift_m),
                 ("local_turn_deg", self.local_turn_deg),
+                ("narrow_window_m", self.narrow_window_m),
+                ("narrow_window_deg", self.narrow_window_deg),
             ],
             |v| v.is_finite() && v >= 0.0,
             "must be a number >= 0",
@@ -161,6 +178,9 @@ impl FrontEndParams {
         if self.depth > 10 {
             return Err(bad("depth", self.depth as f64, "must be at most 10"));
         }
+        if self.icp_stride == 0 {
+            return Err(bad("icp_stride", 0.0, "must be at least 1"));
+        }
         if self.submap_keyframes == 0 {
             return Err(bad("submap_keyframes", 0.0, "must be at least 1"));
         }
@@ -185,7 +205,8 @@ pub enum Placement {
         sigma_m: Option<f64>,
         /// True when the scan became a keyframe of the submap.
         keyframe: bool,
-        /// True when the wide search placed it (false: ICP from the prediction).
+        /// True when the wide search placed it (false: the narrow search or ICP from the
+        /// prediction).
         wide: bool,
     },
     /// The scan could not be placed and was left out.
@@ -220,8 +241,8 @@ impl std::fmt::Display for SkipReason {
 #[derive(Debug, Clone)]
 struct Keyframe {
     pose: Pose2,
-    geometry: ScanGeometry,
-    scan: Scan,
+    /// The refinement's reference points of the scan, in its own frame (fitted once).
+    target: Option<MatchTarget>,
     /// Thinned hits, world frame.
     points: Vec<[f64; 2]>,
 }
@@ -245,6 +266,7 @@ impl FrontEnd {
         params.validate()?;
         let surface_m = params.icp_surface_m;
         let surface_spacings = params.icp_surface_spacings;
+        let stride = params.icp_stride;
         Ok(Self {
             params,
             // Real scans with 1 deg rays: neighbouring hits of one wall lie far apart at range.
@@ -254,6 +276,7 @@ impl FrontEnd {
                 surface_spacings,
                 normal_half_length_m: surface_m * 0.6,
                 min_pairs: 30,
+                stride,
                 ..MatchParams::default()
             },
             keyframes: VecDeque::new(),
@@ -363,31 +386,53 @@ impl FrontEnd {
                 wide: false,
             };
         }
-        let damped = Pose2::new(
-            step.x_m,
-            step.y_m,
-            step.theta_rad * self.params.rotation_prediction,
-        );
-        let centre = prediction.unwrap_or_else(|| last.compose(&damped));
-        let window = Window {
-            linear_m: self.params.linear_window_m,
-            angular_rad: self.params.angular_window_deg.to_radians(),
-            translation_cost: self.params.translation_cost,
-            rotation_cost: self.params.rotation_cost,
-        };
+        let p = &self.params;
         let grid = self
             .grid
             .as_ref()
             .expect("a submap exists once a scan is placed");
-        let Some(found) = search(grid, &points, &centre, &window, self.params.min_quality) else {
-            return Placement::Skipped {
-                reason: SkipReason::NoMatch,
-            };
+        let window = |linear_m: f64, angular_deg: f64| Window {
+            linear_m,
+            angular_rad: angular_deg.to_radians(),
+            translation_cost: p.translation_cost,
+            rotation_cost: p.rotation_cost,
+        };
+        // Fast scans: the best pose near the prediction, when it is not on the narrow
+        // window's edge.
+        let slow = step.x_m.hypot(step.y_m) <= 0.5 * p.narrow_window_m
+            && step.theta_rad.abs() <= 0.5 * p.narrow_window_deg.to_radians();
+        // Only for the constant-velocity model: a caller's prediction keeps its own window.
+        let narrow =
+            (prediction.is_none() && p.narrow_window_m > 0.0 && p.narrow_window_deg > 0.0 && slow)
+                .then(|| {
+                    let w = window(
+                        p.narrow_window_m.min(p.linear_window_m),
+                        p.narrow_window_deg.min(p.angular_window_deg),
+                    );
+                    search(grid, &points, &guess, &w, p.min_quality)
+                })
+                .flatten()
+                .filter(|f| !f.on_edge);
+        let wide = narrow.is_none();
+        let found = match narrow {
+            Some(f) => f,
+            None => {
+                let damped = Pose2::new(step.x_m, step.y_m, step.theta_rad * p.rotation_prediction);
+                let centre = prediction.unwrap_or_else(|| last.compose(&damped));
+                let w = window(p.linear_window_m, p.angular_window_deg);
+                let Some(f) = search(grid, &points, &centre, &w, p.min_quality) else {
+                    return Placement::Skipped {
+                        reason: SkipReason::NoMatch,
+                    };
+                };
+                f
+            }
         };
         tracing::trace!(
-            dx = found.pose.x_m - centre.x_m,
-            dy = found.pose.y_m - centre.y_m,
+            dx = found.pose.x_m - guess.x_m,
+            dy = found.pose.y_m - guess.y_m,
             quality = found.quality,
+            wide,
             "correlative placement"
         );
         let (pose, sigma_m) = self.refine(geometry, scan, &points, found);
@@ -401,7 +446,7 @@ impl FrontEnd {
             refined: sigma_m.is_some(),
             sigma_m,
             keyframe,
-            wide: true,
+            wide,
         }
     }
 
@@ -498,10 +543,13 @@ impl FrontEnd {
                 ]
             })
             .collect();
+        let target = self
+            .params
+            .refine
+            .then(|| MatchTarget::from_scan(geometry, scan, &self.match_params));
         self.keyframes.push_back(Keyframe {
             pose,
-            geometry: *geometry,
-            scan: scan.clone(),
+            target,
             points: world,
         });
         while self.keyframes.len() > self.params.submap_keyframes {
@@ -518,8 +566,9 @@ impl FrontEnd {
         if p.refine {
             self.target = MatchTarget::new();
             for k in &self.keyframes {
-                self.target
-                    .add_scan(&k.pose, &k.geometry, &k.scan, &self.match_params);
+                if let Some(t) = &k.target {
+                    self.target.add_target(&k.pose, t);
+                }
             }
         }
     }

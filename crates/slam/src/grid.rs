@@ -49,21 +49,24 @@ impl ScoreGrid {
         let mut base = vec![0u8; width * height];
         let kernel = Kernel::new(radius, resolution_m, sigma_m);
         let r = radius as i64;
+        let (w, h) = (width as i64, height as i64);
         for p in points {
             let fx = (p[0] - origin[0]) / resolution_m;
             let fy = (p[1] - origin[1]) / resolution_m;
             let (cx, cy) = (fx.floor() as i64, fy.floor() as i64);
-            let (kx, ky) = (kernel.row(fx - cx as f64), kernel.row(fy - cy as f64));
-            let x0 = (cx - r).max(0);
-            let x1 = (cx + r).min(width as i64 - 1);
-            for y in (cy - r).max(0)..=(cy + r).min(height as i64 - 1) {
-                let wy = ky[(y - cy + r) as usize];
-                let row = &mut base[y as usize * width..(y as usize + 1) * width];
-                for x in x0..=x1 {
-                    // +0.5 and truncation: rounding without a libm call.
-                    let v = (wy * kx[(x - cx + r) as usize] + 0.5) as u8;
-                    let cell = &mut row[x as usize];
-                    *cell = (*cell).max(v);
+            let patch = kernel.patch(fx - cx as f64, fy - cy as f64);
+            // The margin keeps the patch inside the grid; clipped all the same.
+            let (x0, x1) = ((cx - r).max(0), (cx + r).min(w - 1));
+            if x0 > x1 {
+                continue;
+            }
+            for y in (cy - r).max(0)..=(cy + r).min(h - 1) {
+                let k = (y - cy + r) as usize * kernel.width;
+                let src = &patch[k + (x0 - cx + r) as usize..=k + (x1 - cx + r) as usize];
+                let start = y as usize * width;
+                let dst = &mut base[start + x0 as usize..=start + x1 as usize];
+                for (d, s) in dst.iter_mut().zip(src) {
+                    *d = (*d).max(*s);
                 }
             }
         }
@@ -93,6 +96,17 @@ impl ScoreGrid {
             return 0;
         }
         u32::from(self.levels[k][y as usize * self.width + x as usize])
+    }
+
+    /// Cells along x and along y.
+    pub(crate) fn size(&self) -> [usize; 2] {
+        [self.width, self.height]
+    }
+
+    /// The cells of level `k`, row after row.
+    #[inline]
+    pub(crate) fn level(&self, k: usize) -> &[u8] {
+        &self.levels[k]
     }
 
     /// The cell holding world point `p` (may lie outside the grid).
@@ -133,35 +147,52 @@ fn pool(prev: &[u8], width: usize, height: usize, s: usize) -> Vec<u8> {
 /// within 1 / 32 of a cell).
 const SUB: usize = 16;
 
-/// The Gaussian fall-off along one axis, tabulated for a point at `SUB + 1` positions within
-/// its cell: the field is the product of an x and a y factor (each `sqrt(FULL)` at the
-/// point), so no exponential is evaluated per cell.
+/// The Gaussian fall-off around a point, tabulated for the point at `SUB + 1` positions
+/// along each axis within its cell: each patch of `width` x `width` cells holds the product
+/// of an x and a y factor (each `sqrt(FULL)` at the point), rounded, so that no exponential
+/// or product is evaluated per cell.
 struct Kernel {
     width: usize,
-    /// `SUB + 1` rows of `width` factors: row `q` for a point `q / SUB` into its cell, entry
-    /// `j` for the cell `j - radius` away.
-    rows: Vec<f64>,
+    /// `(SUB + 1)^2` patches, row after row: patch `qy * (SUB + 1) + qx` for a point `qx /
+    /// SUB` and `qy / SUB` into its cell, entry `j * width + i` for the cell `i - radius`
+    /// right of it and `j - radius` above.
+    patches: Vec<u8>,
 }
 
 impl Kernel {
     fn new(radius: usize, resolution_m: f64, sigma_m: f64) -> Self {
         let width = 2 * radius + 1;
         let inv = 1.0 / (2.0 * sigma_m * sigma_m);
-        let mut rows = Vec::with_capacity((SUB + 1) * width);
+        let mut factors = Vec::with_capacity((SUB + 1) * width);
         for q in 0..=SUB {
             let f = q as f64 / SUB as f64;
             for j in 0..width {
                 let d = (j as f64 - radius as f64 + 0.5 - f) * resolution_m;
-                rows.push((-d * d * inv).exp() * (FULL as f64).sqrt());
+                factors.push((-d * d * inv).exp() * (FULL as f64).sqrt());
             }
         }
-        Self { width, rows }
+        let mut patches = Vec::with_capacity((SUB + 1) * (SUB + 1) * width * width);
+        for qy in 0..=SUB {
+            for qx in 0..=SUB {
+                for wy in &factors[qy * width..(qy + 1) * width] {
+                    // +0.5 and truncation: rounding without a libm call.
+                    patches.extend(
+                        factors[qx * width..(qx + 1) * width]
+                            .iter()
+                            .map(|wx| (wy * wx + 0.5) as u8),
+                    );
+                }
+            }
+        }
+        Self { width, patches }
     }
 
-    /// The factors for a point `frac` (0..1) into its cell.
-    fn row(&self, frac: f64) -> &[f64] {
-        let q = ((frac * SUB as f64 + 0.5) as usize).min(SUB);
-        &self.rows[q * self.width..(q + 1) * self.width]
+    /// The patch for a point `fx`, `fy` (0..1) into its cell.
+    fn patch(&self, fx: f64, fy: f64) -> &[u8] {
+        let q = |f: f64| ((f * SUB as f64 + 0.5) as usize).min(SUB);
+        let n = self.width * self.width;
+        let k = q(fy) * (SUB + 1) + q(fx);
+        &self.patches[k * n..(k + 1) * n]
     }
 }
 

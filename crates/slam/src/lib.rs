@@ -1,7 +1,7 @@
 //! Laser-only pose tracking and trajectory evaluation.
 //!
-//! [`FrontEnd`] places each scan against a local submap of recent keyframes: a wide
-//! correlative search (branch and bound over a max-pooled likelihood field) around a
+//! [`FrontEnd`] places each scan against a local submap of recent keyframes: a narrow, then a
+//! wide correlative search (branch and bound over a max-pooled likelihood field) around a
 //! constant-velocity prediction, refined by the point-to-line ICP of `localiser`. It never
 //! reads odometry: the laser alone decides where the robot is. A scan that cannot be placed is
 //! reported as [`Placement::Skipped`], never placed silently. [`eval`] measures a trajectory

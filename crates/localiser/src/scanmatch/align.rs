@@ -316,6 +316,27 @@ mod tests {
     }
 
     #[test]
+    fn targets_placed_in_a_common_frame_match_like_their_scans() {
+        // Each scan's target built once in its own frame, then placed at the scan's pose.
+        let g = ScanGeometry::paper();
+        let p = MatchParams::default();
+        let a = Pose2::new(-2.0, -1.0, 0.0);
+        let b = Pose2::new(0.0, -1.0, 1.2);
+        let c = Pose2::new(0.3, 0.2, 2.0);
+        let mut t = MatchTarget::new();
+        for pose in [a, b] {
+            t.add_target(
+                &pose,
+                &MatchTarget::from_scan(&g, &cast(&room(), pose, None), &p),
+            );
+        }
+        let guess = Pose2::new(0.36, 0.16, 2.02);
+        let m = t.align(&g, &cast(&room(), c, None), guess, &p).unwrap();
+        assert!(m.pose.position().distance_m(&c.position()) < 2e-3, "{m:?}");
+        assert!((m.pose.theta_rad - 2.0).abs() < 1e-3, "{m:?}");
+    }
+
+    #[test]
     fn nothing_to_match_is_none() {
         let g = ScanGeometry::paper();
         let p = MatchParams::default();

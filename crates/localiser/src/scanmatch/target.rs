@@ -73,8 +73,18 @@ impl MatchTarget {
         scan: &Scan,
         params: &MatchParams,
     ) {
+        self.push_moved(pose, oriented_hits(geometry, scan, params, 1));
+    }
+
+    /// Adds the reference points of `other` (in its own frame) placed at `pose` in this
+    /// target's frame: the same as adding `other`'s scans again, without refitting normals.
+    pub fn add_target(&mut self, pose: &Pose2, other: &MatchTarget) {
+        self.push_moved(pose, other.points.iter().copied());
+    }
+
+    fn push_moved(&mut self, pose: &Pose2, points: impl IntoIterator<Item = Oriented>) {
         let (s, c) = pose.theta_rad.sin_cos();
-        for o in oriented_hits(geometry, scan, params, 1) {
+        for o in points {
             self.points.push(Oriented {
                 p: [
                     pose.x_m + c * o.p[0] - s * o.p[1],
