@@ -152,6 +152,8 @@ pub struct Navigator {
     sigma_position_m: f64,
     /// Leg ends kept for `[localiser] revisit`.
     revisits: Revisits,
+    /// The leg of the last revisit correction (0: none yet).
+    last_revisit_leg: usize,
 }
 
 impl Navigator {
@@ -227,6 +229,7 @@ impl Navigator {
             sigma_heading_rad: 0.0,
             sigma_position_m: 0.0,
             revisits: Revisits::default(),
+            last_revisit_leg: 0,
         })
     }
 
@@ -891,9 +894,18 @@ impl Navigator {
             self.estimate,
             sigma,
         ) {
+            // The drift grew since the later of the matched leg end and the last correction:
+            // the leg ends in between move with it, and the map is drawn again from them.
+            let from = c.anchor_leg.max(self.last_revisit_leg);
+            self.revisits
+                .distribute(from, self.legs, self.estimate, c.pose);
             self.estimate = c.pose;
             self.sigma_position_m = c.sigma_m;
             self.sigma_heading_rad = c.sigma_heading_rad;
+            self.last_revisit_leg = self.legs;
+            self.grid = self
+                .revisits
+                .grid(self.params.localiser.map_resolution_m, &self.geometry);
         }
         let sigma = (self.sigma_position_m, self.sigma_heading_rad);
         self.revisits.add(self.legs, self.estimate, scan, sigma);

@@ -1,7 +1,7 @@
 //! Revisits: a leg's end scan matched against the leg-end scans of earlier legs taken nearby,
 //! so that a place seen again pulls the estimate back to where it was mapped.
 
-use localiser::{MatchParams, MatchTarget};
+use localiser::{MatchParams, MatchTarget, OccupancyGrid};
 use scan_types::{Pose2, Scan, ScanGeometry};
 
 use crate::params::LocaliserParams;
@@ -26,6 +26,8 @@ struct Keyframe {
 /// A revisit correction: the new estimate and its uncertainty.
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct Correction {
+    /// The leg whose end the scan was matched in the frame of (the nearest earlier leg end).
+    pub anchor_leg: usize,
     /// The estimate after the correction.
     pub pose: Pose2,
     /// Its position uncertainty, metres (one standard deviation).
@@ -52,6 +54,39 @@ impl Revisits {
         });
     }
 
+    /// Spreads a correction of the estimate at leg `leg`'s end (from `before` to `after`) over
+    /// the leg ends kept since leg `from`, in proportion to their leg number: the drift grew
+    /// leg by leg, so the older leg ends move less.
+    pub fn distribute(&mut self, from: usize, leg: usize, before: Pose2, after: Pose2) {
+        if leg <= from {
+            return;
+        }
+        let dx = after.x_m - before.x_m;
+        let dy = after.y_m - before.y_m;
+        let dth = scan_types::normalize_angle_rad(after.theta_rad - before.theta_rad);
+        for k in self
+            .keyframes
+            .iter_mut()
+            .filter(|k| k.leg > from && k.leg < leg)
+        {
+            let w = (k.leg - from) as f64 / (leg - from) as f64;
+            k.pose = Pose2::new(
+                k.pose.x_m + w * dx,
+                k.pose.y_m + w * dy,
+                scan_types::normalize_angle_rad(k.pose.theta_rad + w * dth),
+            );
+        }
+    }
+
+    /// The occupancy grid of every leg end kept, at its (corrected) pose.
+    pub fn grid(&self, resolution_m: f64, geometry: &ScanGeometry) -> OccupancyGrid {
+        let mut grid = OccupancyGrid::new(resolution_m);
+        for k in &self.keyframes {
+            grid.integrate(&k.pose, geometry, &k.scan);
+        }
+        grid
+    }
+
     /// Matches `scan`, taken at leg `leg`'s end near `estimate` (uncertainty `sigma`: metres,
     /// radians), against the nearest earlier leg ends old enough; the correction when the
     /// match is good, pins the pose and lies within the uncertainty.
@@ -75,6 +110,7 @@ impl Revisits {
             .collect();
         near.sort_by(|a, b| a.0.total_cmp(&b.0));
         near.truncate(params.revisit_keyframes);
+        let anchor_leg = near.first()?.1.leg;
         let base = near.first()?.1.pose;
         let to_base = base.inverse();
         let defaults = MatchParams::default();
@@ -130,6 +166,7 @@ impl Revisits {
                 (acc.0.min(k.sigma_m), acc.1.min(k.sigma_heading_rad))
             });
         Some(Correction {
+            anchor_leg,
             pose,
             sigma_m: kf_m.hypot(m.worst_sigma_m).min(sigma.0),
             sigma_heading_rad: kf_rad.min(sigma.1),
