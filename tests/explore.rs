@@ -144,8 +144,8 @@ fn explore_json(world: &Path, seed: &str, extra: &[&OsStr]) -> serde_json::Value
     serde_json::from_str(&std::fs::read_to_string(out.join("explore.json")).unwrap()).unwrap()
 }
 
-/// simple_rooms (Stage's six rooms and a corridor), seed 8: without revisits the estimate
-/// drifts and walls are mapped twice; matching each leg's end against the earlier leg ends
+/// simple_rooms (Stage's six rooms and a corridor), seed 8, the seed of 0..10 that drifts
+/// farthest without revisits (0.18 m at the end): its walls are then mapped twice; matching each leg's end against the earlier leg ends
 /// nearby keeps the map within the bar (98 %) and the final error within 0.05 m.
 #[test]
 fn revisits_keep_the_map_of_simple_rooms_accurate() {

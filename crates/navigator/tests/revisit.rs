@@ -69,8 +69,9 @@ fn coming_back_to_the_start_corrects_the_estimate() {
         "without: {out0:.3} then {back0:.3} m"
     );
     // Near the start, the start's scan (taken where the estimate was exact) pulls the
-    // estimate back; what is left is at most the last leg's 6 % on the revisit radius
-    // (1.5 m): 0.09 m.
+    // estimate back. What is left is what the legs after that correction add: at most the
+    // revisit radius plus the goal tolerance (1.5 + 0.15 m), driven 6 % long (0.099 m) after a
+    // turn of at most 180 deg made 4 % short (1.65 m x sin 7.2 deg = 0.207 m): 0.31 m.
     println!("without: {out0:.3} then {back0:.3} m; with: {out1:.3} then {back1:.3} m");
-    assert!(back1 < 0.09, "with: {out1:.3} then {back1:.3} m");
+    assert!(back1 < 0.31, "with: {out1:.3} then {back1:.3} m");
 }

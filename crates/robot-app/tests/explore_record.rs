@@ -8,6 +8,9 @@ use std::process::{Command, Stdio};
 
 use serde_json::Value;
 
+#[path = "common/python.rs"]
+mod python;
+
 const BIN: &str = env!("CARGO_BIN_EXE_robot-app");
 
 /// A 4 m x 3 m walled room with a 0.6 m box in it; the start is its file's.
@@ -23,18 +26,6 @@ centre = [0.8, 0.3]
 size = [0.6, 0.6]
 "#;
 
-fn python_readers_available() -> bool {
-    Command::new("python3")
-        .args([
-            "-c",
-            "import rosbags.highlevel, mcap_ros2.decoder, mcap.reader",
-        ])
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
-        .status()
-        .is_ok_and(|s| s.success())
-}
-
 /// (width, height) of a binary PGM.
 fn pgm_size(path: &Path) -> (u64, u64) {
     let bytes = std::fs::read(path).unwrap();
@@ -49,7 +40,7 @@ fn pgm_size(path: &Path) -> (u64, u64) {
 #[test]
 #[allow(clippy::print_stdout)]
 fn an_exploration_recording_holds_every_scan_its_truth_and_its_map() {
-    if !python_readers_available() {
+    if !python::imports("rosbags.highlevel, mcap_ros2.decoder, mcap.reader") {
         assert!(
             std::env::var_os("CI").is_none(),
             "CI is set but python3 cannot import rosbags and mcap_ros2 (pip install rosbags mcap-ros2-support)"
@@ -78,21 +69,7 @@ fn an_exploration_recording_holds_every_scan_its_truth_and_its_map() {
     let scans = summary["scans"].as_u64().unwrap();
     assert!(scans > 10, "{summary}");
 
-    let script = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../tests/tools/ros2_bag_client.py"
-    );
-    let client = Command::new("python3")
-        .arg(script)
-        .arg(&rec)
-        .output()
-        .expect("python3 runs");
-    assert!(
-        client.status.success(),
-        "{}",
-        String::from_utf8_lossy(&client.stderr)
-    );
-    let bag: Value = serde_json::from_slice(&client.stdout).unwrap();
+    let bag = python::ros2_bag_client(&rec);
     // Every scan the exploration took, each with its true pose.
     assert_eq!(bag["topics"]["/scan"]["count"].as_u64(), Some(scans));
     let truths = bag["truths"].as_array().unwrap();

@@ -9,6 +9,9 @@ use std::process::{Command, Stdio};
 
 use serde_json::Value;
 
+#[path = "common/python.rs"]
+mod python;
+
 const BIN: &str = env!("CARGO_BIN_EXE_robot-app");
 const TOOLS: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../tests/tools");
 
@@ -21,13 +24,7 @@ fn tools_available() -> bool {
             .stdout(Stdio::null())
             .status()
             .is_ok_and(|s| s.success());
-    let python = Command::new("python3")
-        .args(["-c", "import jsonschema, mcap.reader"])
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
-        .status()
-        .is_ok_and(|s| s.success());
-    node && python
+    node && python::imports("jsonschema, mcap.reader")
 }
 
 #[test]

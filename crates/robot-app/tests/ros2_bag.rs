@@ -10,18 +10,13 @@ use std::process::{Command, Output, Stdio};
 use scan_types::RayStatus;
 use serde_json::Value;
 
+#[path = "common/python.rs"]
+mod python;
+
 const BIN: &str = env!("CARGO_BIN_EXE_robot-app");
 
 fn python_readers_available() -> bool {
-    Command::new("python3")
-        .args([
-            "-c",
-            "import rosbags.highlevel, mcap_ros2.decoder, mcap.reader",
-        ])
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
-        .status()
-        .is_ok_and(|s| s.success())
+    python::imports("rosbags.highlevel, mcap_ros2.decoder, mcap.reader")
 }
 
 fn robot_app(args: &[&str]) -> Output {
@@ -55,21 +50,7 @@ fn sim(dir: &Path, name: &str, profile: Option<&str>) -> String {
 }
 
 fn run_client(file: &Path) -> Value {
-    let script = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../tests/tools/ros2_bag_client.py"
-    );
-    let out = Command::new("python3")
-        .arg(script)
-        .arg(file)
-        .output()
-        .expect("python3 runs");
-    assert!(
-        out.status.success(),
-        "ros2 bag client failed: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    serde_json::from_slice(&out.stdout).expect("the client prints one JSON object")
+    python::ros2_bag_client(file)
 }
 
 fn f(v: &Value) -> f64 {

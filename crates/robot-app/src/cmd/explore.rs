@@ -281,17 +281,19 @@ struct Recording {
 }
 
 impl Recording {
-    /// Opens `--record`'s file in its profile, if given.
+    /// Opens `--record`'s file in its profile, if given; `scan_period_s` is the sensor's scan
+    /// period when known.
     fn open(
         options: &super::LoopOptions,
         geometry: &scan_types::ScanGeometry,
+        scan_period_s: Option<f64>,
     ) -> anyhow::Result<Self> {
         let recorder = options
             .record
             .as_deref()
             .map(|p| {
                 crate::record::Recorder::create_profile(p, geometry, options.profile)
-                    .map(|r| (r, p.to_path_buf()))
+                    .map(|r| (r.with_scan_period(scan_period_s), p.to_path_buf()))
                     .with_context(|| format!("cannot record to {}", p.display()))
             })
             .transpose()?;
@@ -395,9 +397,10 @@ fn explore_sim(
         .start(config.localiser.map_resolution_m)?
         .map(std::cell::RefCell::new);
     let geometry = setup.sensor.geometry();
-    let mut recording = Recording::open(&args.options, &geometry)?;
-    let cpu0 = thread_cpu_time_s();
     let (mut laser, mut base, truth) = setup.build()?.split();
+    let mut recording =
+        Recording::open(&args.options, &geometry, Some(setup.sensor.scan_period_s()))?;
+    let cpu0 = thread_cpu_time_s();
     let run = {
         let mut show = live_scan(&live, &geometry, || Some(truth.pose()));
         let mut on_scan = |scan: &scan_types::Scan, estimate: &Pose2| {
@@ -470,7 +473,10 @@ fn explore_robot(
         .live
         .start(config.localiser.map_resolution_m)?
         .map(std::cell::RefCell::new);
-    let mut recording = Recording::open(&args.options, &geometry)?;
+    let scan_period_s = laser
+        .urg_mut()
+        .map(|u| u.params().scan_period().as_secs_f64());
+    let mut recording = Recording::open(&args.options, &geometry, scan_period_s)?;
     let cpu0 = thread_cpu_time_s();
     let run = {
         let mut show = live_scan(&live, &geometry, || None);

@@ -1,6 +1,6 @@
-//! The naming rule of docs/outputs.md, checked on a written JSON file: every key holding a
-//! number, or an array of numbers, ends with a unit suffix, or is in the documented list of
-//! unitless keys (counts, names, flags, scores). An object's keys are checked in turn.
+//! The naming rule of docs/outputs.md, checked on a written JSON file: every key that does not
+//! hold an object or an array of objects ends with a unit suffix, or is in the documented list
+//! of unitless keys (counts, names, flags, scores). An object's keys are checked in turn.
 
 /// Unit suffixes (docs/outputs.md, "Units").
 pub const UNIT_SUFFIXES: [&str; 6] = ["_m", "_deg", "_rad", "_s", "_ms", "_share"];
