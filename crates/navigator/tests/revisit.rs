@@ -3,17 +3,12 @@
 //! out to a target and back to the start.
 
 use navigator::{Action, HeadingRule, Navigator, Params, Reason, TravelRule};
-use scan_types::testkit::{Seg, boxed, scan_at};
-use scan_types::{Pose2, ScanGeometry, WorldPoint};
+use scan_types::testkit::{Seg, scan_at};
 
-/// A closed 8 m x 5 m room with three boxes in it.
-fn room() -> Vec<Seg> {
-    let mut segs = boxed(0.0, 0.0, 8.0, 5.0);
-    segs.extend(boxed(3.0, 1.4, 3.6, 2.0));
-    segs.extend(boxed(5.0, 3.2, 5.5, 3.7));
-    segs.extend(boxed(1.8, 3.5, 2.2, 3.9));
-    segs
-}
+#[path = "common/room.rs"]
+mod room;
+use room::room;
+use scan_types::{Pose2, ScanGeometry, WorldPoint};
 
 /// Drives `nav` on the scaled base from `truth` until it finishes; the true pose then.
 fn drive(nav: &mut Navigator, segs: &[Seg], mut truth: Pose2) -> Pose2 {

@@ -2,17 +2,12 @@
 //! do what it is told: it turns 4 % short and drives 6 % long.
 
 use navigator::{Action, HeadingRule, Navigator, Params, Reason, TravelRule};
-use scan_types::testkit::{Seg, boxed, scan_at};
-use scan_types::{Pose2, ScanGeometry, WorldPoint};
+use scan_types::testkit::{boxed, scan_at};
 
-/// A closed 8 m x 5 m room with two boxes in it.
-fn room() -> Vec<Seg> {
-    let mut segs = boxed(0.0, 0.0, 8.0, 5.0);
-    segs.extend(boxed(3.0, 1.4, 3.6, 2.0));
-    segs.extend(boxed(5.0, 3.2, 5.5, 3.7));
-    segs.extend(boxed(1.8, 3.5, 2.2, 3.9));
-    segs
-}
+#[path = "common/room.rs"]
+mod room;
+use room::room;
+use scan_types::{Pose2, ScanGeometry, WorldPoint};
 
 /// Runs the navigator from (1, 1, 0) to (7, 4) on a base with the given turn and drive scale;
 /// returns how it ended, its final estimate and the true pose.

@@ -152,17 +152,7 @@ impl WorldDescription {
     /// (dark = obstacle). Load it back with `World::load_stage_bitmap` and the bounds' size.
     pub fn write_png(&self, path: &Path, resolution_m: f64) -> Result<(), SimError> {
         let (bm, _) = self.rasterise(resolution_m)?;
-        let img = bitmap_to_gray(&bm);
-        let mut bytes = Vec::new();
-        img.write_to(
-            &mut std::io::Cursor::new(&mut bytes),
-            image::ImageFormat::Png,
-        )
-        .map_err(|e| SimError::Image {
-            path: path.to_path_buf(),
-            message: e.to_string(),
-        })?;
-        write_atomic(path, &bytes)
+        write_bitmap_png(&bm, path)
     }
 
     fn rasterise(&self, resolution_m: f64) -> Result<(Bitmap, [f64; 2]), SimError> {
@@ -189,6 +179,21 @@ impl WorldDescription {
         }
         Ok((world.rasterise(lo, hi, resolution_m), lo))
     }
+}
+
+/// Writes `bm` as a grey PNG at `path`, atomically.
+fn write_bitmap_png(bm: &Bitmap, path: &Path) -> Result<(), SimError> {
+    let mut bytes = Vec::new();
+    bitmap_to_gray(bm)
+        .write_to(
+            &mut std::io::Cursor::new(&mut bytes),
+            image::ImageFormat::Png,
+        )
+        .map_err(|e| SimError::Image {
+            path: path.to_path_buf(),
+            message: e.to_string(),
+        })?;
+    write_atomic(path, &bytes)
 }
 
 fn bitmap_to_gray(bm: &Bitmap) -> image::GrayImage {
@@ -554,17 +559,7 @@ impl World {
     pub fn write_png(&self, path: &Path, cell_m: f64) -> Result<(), SimError> {
         let (lo, hi) = self.bounds();
         let bm = self.rasterise([lo.x_m(), lo.y_m()], [hi.x_m(), hi.y_m()], cell_m);
-        let mut bytes = Vec::new();
-        bitmap_to_gray(&bm)
-            .write_to(
-                &mut std::io::Cursor::new(&mut bytes),
-                image::ImageFormat::Png,
-            )
-            .map_err(|e| SimError::Image {
-                path: path.to_path_buf(),
-                message: e.to_string(),
-            })?;
-        write_atomic(path, &bytes)
+        write_bitmap_png(&bm, path)
     }
 }
 
