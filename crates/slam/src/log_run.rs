@@ -7,7 +7,7 @@ use std::time::Instant;
 use scan_types::{Pose2, Scan, ScanGeometry};
 use serde::Serialize;
 
-use crate::eval::{RelativeError, Stats, absolute_error, relative_error};
+use crate::eval::{RelativeError, Stats, absolute_errors, relative_error};
 use crate::{FrontEnd, FrontEndParams, LoopParams, LoopReport, Placement, SlamError, close_loops};
 
 /// One placed scan.
@@ -76,6 +76,8 @@ pub struct Evaluation {
     pub relative_10: Option<RelativeError>,
     /// Position error after an SE(2) alignment, metres.
     pub absolute_m: Stats,
+    /// The last placed scan's position error after that alignment, metres.
+    pub final_position_error_m: f64,
 }
 
 /// A finished run.
@@ -273,9 +275,11 @@ fn percentile(v: &mut [f64], q: f64) -> f64 {
 fn evaluate(placed: &[Placed]) -> Option<Evaluation> {
     let reference: Vec<Pose2> = placed.iter().map(|p| p.reference).collect::<Option<_>>()?;
     let est: Vec<Pose2> = placed.iter().map(|p| p.pose).collect();
+    let absolute = absolute_errors(&est, &reference).ok()?;
     Some(Evaluation {
         relative_1: relative_error(&est, &reference, 1).ok()?,
         relative_10: relative_error(&est, &reference, 10).ok(),
-        absolute_m: absolute_error(&est, &reference).ok()?,
+        absolute_m: Stats::of(&absolute),
+        final_position_error_m: *absolute.last()?,
     })
 }
