@@ -337,6 +337,62 @@ fn sigint_stops_the_base_writes_everything_and_exits_130() {
 }
 
 #[test]
+fn ctrl_c_with_slam_map_still_maps_the_run_from_its_scans() {
+    let mut h = Harness::start(BaseGains::default(), &["--slam-map"]);
+    let pid = nix::unistd::Pid::from_raw(i32::try_from(h.child.id()).unwrap());
+    h.drive(|n, _| {
+        if n == 20 {
+            nix::sys::signal::kill(pid, nix::sys::signal::Signal::SIGINT).unwrap();
+        }
+    });
+    // Where the simulated robot ended, in the frame of its start (the first scan's).
+    let moved = paper_start().inverse().compose(&h.truth.pose());
+    let end = h.finish();
+    assert_eq!(
+        end.status.code(),
+        Some(130),
+        "stderr:
+{}",
+        end.stderr
+    );
+    assert_eq!(end.reason(), "interrupted");
+    end.assert_clean_end();
+    let run = end.dir.path().join("run");
+    // Every scan the run read is in its recording, and every one of them was mapped.
+    let mut log = scan_log::open_log(&run.join("run.mcap"), None).expect("the recording opens");
+    let mut scans = 0u64;
+    while scan_types::LaserSource::next_scan(&mut log).is_ok() {
+        scans += 1;
+    }
+    let slam = run.join("slam");
+    let report: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(slam.join("slam.json")).unwrap()).unwrap();
+    assert!(scans > 0);
+    assert_eq!(report["scans"].as_u64(), Some(scans));
+    assert_eq!(report["placed"].as_u64(), Some(scans));
+    for f in ["map.pgm", "map.yaml", "map.png", "trajectory.tum"] {
+        assert!(slam.join(f).metadata().is_ok_and(|m| m.len() > 0), "{f}");
+    }
+    assert_no_partial_files(&slam);
+    // The laser-only estimate of the last scan is within 0.1 m of where the simulator left the
+    // robot, after about 1 m: the last scan can come from before the last motion command
+    // (5 cm earlier in these runs), as the sensor streams on its own clock.
+    let text = std::fs::read_to_string(slam.join("trajectory.tum")).unwrap();
+    let last: Vec<f64> = text
+        .lines()
+        .last()
+        .unwrap()
+        .split_whitespace()
+        .map(|v| v.parse().unwrap())
+        .collect();
+    let off = (last[1] - moved.x_m).hypot(last[2] - moved.y_m);
+    assert!(
+        moved.x_m.hypot(moved.y_m) > 0.8 && off < 0.1,
+        "moved {moved:?}, estimate {last:?}"
+    );
+}
+
+#[test]
 fn a_base_error_ends_as_base_failure_not_sensor_failure() {
     let mut h = Harness::start(BaseGains::default(), &[]);
     h.drive_answering(|_, _| {}, |n| (n == 6).then_some("error motor stalled"));

@@ -92,3 +92,37 @@ fn a_recorded_exploration_of_mbicp_replays_within_five_centimetres_of_the_truth(
     assert!(dist(reference, last_xy(&out.join("truth.tum"))) < 1e-6);
     assert!(dist(reference, last_xy(&out.join("estimate.tum"))) > 1e-3);
 }
+
+#[test]
+fn sim_with_slam_map_maps_the_run_within_five_centimetres_of_the_truth() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    // The paper's scenario, turns of up to 90 deg between scans (the default): warned about.
+    let o = Command::new(BIN)
+        .args(["sim", "--slam-map", "--out"])
+        .arg(&out)
+        .env("RUST_LOG", "warn")
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(stderr.contains("rotation_chunk_deg"), "{stderr}");
+    assert!(out.join("run.mcap").exists());
+    let report = json(&out.join("slam/slam.json"));
+    assert_eq!(report["placed"], report["scans"], "{report}");
+    let e = &report["evaluation"];
+    let (ate, last) = (
+        e["absolute_m"]["rmse"].as_f64().unwrap(),
+        e["final_position_error_m"].as_f64().unwrap(),
+    );
+    assert!(ate <= 0.05 && last <= 0.05, "ATE {ate} m, final {last} m");
+    for f in [
+        "map.pgm",
+        "map.yaml",
+        "map.png",
+        "trajectory.tum",
+        "reference.tum",
+    ] {
+        assert!(out.join("slam").join(f).exists(), "{f}");
+    }
+}
