@@ -6,7 +6,7 @@
 use std::io::{BufRead, BufReader, Write};
 use std::path::Path;
 use std::process::{Child, ChildStdin, ChildStdout, Command, ExitStatus, Stdio};
-use std::sync::{Arc, RwLock, RwLockReadGuard, RwLockWriteGuard};
+use std::sync::Arc;
 use std::time::Duration;
 
 use scan_types::{MotionBase, WorldPoint};
@@ -16,19 +16,7 @@ use urg_driver::{Fault, Model, Profile, PtyServer};
 /// A goal two legs from the paper's start (about 70 scans): quick over a 10 Hz sensor.
 const GOAL: (f64, f64) = (-1.0, -3.0);
 
-/// Pseudo-terminals are numbered by the system and reused: while one test's sensor is
-/// unplugged, another test's new terminal could take its number. The unplugging test runs
-/// alone (write lock); the others share (read lock).
-static PTYS: RwLock<()> = RwLock::new(());
-
-/// This test's hold on [`PTYS`].
-enum PtyHold {
-    Shared(#[allow(dead_code)] RwLockReadGuard<'static, ()>),
-    Alone(#[allow(dead_code)] RwLockWriteGuard<'static, ()>),
-}
-
 struct Harness {
-    _pty: PtyHold,
     child: Child,
     to_app: ChildStdin,
     from_app: BufReader<ChildStdout>,
@@ -42,17 +30,6 @@ struct Harness {
 
 impl Harness {
     fn start(gains: BaseGains, extra: &[&str]) -> Harness {
-        let hold = PtyHold::Shared(PTYS.read().unwrap_or_else(|e| e.into_inner()));
-        Self::start_holding(hold, gains, extra)
-    }
-
-    /// [`Harness::start`] with no other test's terminal opened or closed until it ends.
-    fn start_alone(gains: BaseGains, extra: &[&str]) -> Harness {
-        let hold = PtyHold::Alone(PTYS.write().unwrap_or_else(|e| e.into_inner()));
-        Self::start_holding(hold, gains, extra)
-    }
-
-    fn start_holding(hold: PtyHold, gains: BaseGains, extra: &[&str]) -> Harness {
         let preset = SensorPreset::Urg04lx;
         let sim = Simulation::new(
             Arc::new(World::paper()),
@@ -91,7 +68,6 @@ impl Harness {
         let to_app = child.stdin.take().unwrap();
         let from_app = BufReader::new(child.stdout.take().unwrap());
         Harness {
-            _pty: hold,
             child,
             to_app,
             from_app,
@@ -238,7 +214,7 @@ fn no_fault_reaches_the_goal() {
 
 #[test]
 fn unplug_and_replug_mid_leg_is_survived() {
-    let mut h = Harness::start_alone(BaseGains::default(), &[]);
+    let mut h = Harness::start(BaseGains::default(), &[]);
     h.drive(|n, h| {
         if n == 10 {
             // Mid-leg: the sensor is gone for 2 s, then back behind the same path.

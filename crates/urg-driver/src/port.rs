@@ -150,19 +150,26 @@ impl<T: Read + Write> ScipPort<T> {
 
     /// Writes raw bytes to the sensor.
     pub fn write_raw(&mut self, bytes: &[u8]) -> Result<(), UrgError> {
-        self.io
-            .write_all(bytes)
-            .and_then(|()| self.io.flush())
-            .map_err(|e| {
-                if e.kind() == io::ErrorKind::TimedOut {
-                    UrgError::Timeout {
-                        command: "write".into(),
-                        waited_ms: 0,
-                    }
-                } else {
-                    map_io(e, "write")
-                }
-            })
+        let timeout = || UrgError::Timeout {
+            command: "write".into(),
+            waited_ms: 0,
+        };
+        self.io.write_all(bytes).map_err(|e| {
+            if e.kind() == io::ErrorKind::TimedOut {
+                timeout()
+            } else {
+                map_io(e, "write")
+            }
+        })?;
+        // serialport reports a failed drain as a bare "flush failed", its errno dropped; a
+        // terminal fails to drain only when its device is gone (unplugged mid-write).
+        self.io.flush().map_err(|e| {
+            if e.kind() == io::ErrorKind::TimedOut {
+                timeout()
+            } else {
+                UrgError::Disconnected(format!("flush: {e}"))
+            }
+        })
     }
 
     /// Sends a command (with an optional tag) without waiting for its reply.
@@ -519,5 +526,36 @@ impl<T: Read + Write> ScipPort<T> {
     /// Stops a stream with `QT`, skipping the scans still in flight.
     pub fn stop_stream(&mut self) -> Result<(), UrgError> {
         self.laser_off()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Takes every write; its flush fails as serialport's does when the device is gone.
+    struct Vanished;
+
+    impl Read for Vanished {
+        fn read(&mut self, _: &mut [u8]) -> io::Result<usize> {
+            Ok(0)
+        }
+    }
+
+    impl Write for Vanished {
+        fn write(&mut self, buf: &[u8]) -> io::Result<usize> {
+            Ok(buf.len())
+        }
+        fn flush(&mut self) -> io::Result<()> {
+            Err(io::Error::other("flush failed"))
+        }
+    }
+
+    #[test]
+    fn a_failed_flush_is_a_disconnect() {
+        let mut port = ScipPort::new(Vanished, PortConfig::default());
+        let e = port.write_raw(b"QT\n").unwrap_err();
+        assert!(matches!(e, UrgError::Disconnected(_)), "{e}");
+        assert!(e.to_string().contains("flush failed"), "{e}");
     }
 }
