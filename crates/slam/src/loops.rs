@@ -168,6 +168,17 @@ pub struct Closure {
     pub measured: [f64; 3],
     /// Kept by the optimised graph.
     pub accepted: bool,
+    /// Standard deviation of its heading in the graph, degrees.
+    pub heading_sigma_deg: f64,
+    /// Heading standard deviation from the ICP refinement's data alone, degrees (`None`: the
+    /// refinement was not kept).
+    pub data_heading_sigma_deg: Option<f64>,
+    /// Worst position standard deviation from the ICP refinement's data alone, metres.
+    pub data_worst_sigma_m: Option<f64>,
+    /// Its residual against the optimised graph, in standard deviations (x, y, heading).
+    pub residual_sigmas: [f64; 3],
+    /// Its weight under the loss in the optimised graph.
+    pub weight: f64,
 }
 
 /// The front end's trajectory `poses` (of `scans`, all of `geometry`) corrected by loop
@@ -234,10 +245,10 @@ pub fn close_loops(
         let estimate = |s: usize| graph.nodes[s / every].compose(&relative[s]);
         let tried = candidates(&graph.nodes, m, every, params);
         report.tried += tried.len();
-        let matches: Vec<(usize, Pose2, f64)> = tried
+        let matches: Vec<(usize, Pose2, f64, Option<localiser::ScanMatch>)> = tried
             .into_iter()
             .filter_map(|j| {
-                let (pose, quality) = match_submap(
+                let (pose, quality, info) = match_submap(
                     geometry,
                     scans,
                     &points,
@@ -245,12 +256,13 @@ pub fn close_loops(
                     (j * every, i),
                     (front, &match_params, params),
                 )?;
-                Some((j, pose, quality))
+                Some((j, pose, quality, info))
             })
             .collect();
         let mut off = false;
-        for (j, pose, quality) in matches {
+        for (j, pose, quality, info) in matches {
             let measured = graph.nodes[j].inverse().compose(&pose);
+            let heading_sigma = closure_heading_sigma(&points[i], params);
             let edge = Edge {
                 from: j,
                 to: m,
@@ -258,7 +270,7 @@ pub fn close_loops(
                 sigma: [
                     params.closure_sigma_m,
                     params.closure_sigma_m,
-                    closure_heading_sigma(&points[i], params),
+                    heading_sigma,
                 ],
                 robust: true,
             };
@@ -272,6 +284,13 @@ pub fn close_loops(
                 quality,
                 measured: [measured.x_m, measured.y_m, measured.theta_rad],
                 accepted: true,
+                heading_sigma_deg: heading_sigma.to_degrees(),
+                data_heading_sigma_deg: info
+                    .and_then(|m| heading_sigma_of(&m.data_information))
+                    .map(f64::to_degrees),
+                data_worst_sigma_m: info.map(|m| m.worst_direction().1),
+                residual_sigmas: [0.0; 3],
+                weight: 1.0,
             });
         }
         if off {
@@ -281,14 +300,11 @@ pub fn close_loops(
     }
     graph.optimise(&optimise)?;
     report.optimisations += 1;
-    let weights: Vec<f64> = graph
-        .edges
-        .iter()
-        .filter(|e| e.robust)
-        .map(|e| graph.weight(e, &optimise))
-        .collect();
-    for (c, w) in report.closures.iter_mut().zip(weights) {
-        c.accepted = w >= params.reject_weight;
+    let robust: Vec<Edge> = graph.edges.iter().filter(|e| e.robust).copied().collect();
+    for (c, e) in report.closures.iter_mut().zip(&robust) {
+        c.weight = graph.weight(e, &optimise);
+        c.residual_sigmas = graph.residual(e);
+        c.accepted = c.weight >= params.reject_weight;
     }
     report.found = report.closures.len();
     report.accepted = report.closures.iter().filter(|c| c.accepted).count();
@@ -318,6 +334,16 @@ fn closure_heading_sigma(points: &[[f64; 2]], params: &LoopParams) -> f64 {
     } else {
         floor
     }
+}
+
+/// The heading standard deviation of an information matrix (x, y, heading), radians.
+fn heading_sigma_of(h: &[[f64; 3]; 3]) -> Option<f64> {
+    let det = h[0][0] * (h[1][1] * h[2][2] - h[1][2] * h[2][1])
+        - h[0][1] * (h[1][0] * h[2][2] - h[1][2] * h[2][0])
+        + h[0][2] * (h[1][0] * h[2][1] - h[1][1] * h[2][0]);
+    let minor = h[0][0] * h[1][1] - h[0][1] * h[1][0];
+    let var = minor / det;
+    (det > 0.0 && var > 0.0 && var.is_finite()).then(|| var.sqrt())
 }
 
 /// The nearest earlier nodes to node `m` (of `every` scans each) within the search radius, at
@@ -354,7 +380,7 @@ fn match_submap(
     estimate: &dyn Fn(usize) -> Pose2,
     (j, i): (usize, usize),
     (front, match_params, params): (&FrontEndParams, &MatchParams, &LoopParams),
-) -> Option<(Pose2, f64)> {
+) -> Option<(Pose2, f64, Option<localiser::ScanMatch>)> {
     if points[i].len() < front.min_points {
         return None;
     }
@@ -392,19 +418,18 @@ fn match_submap(
         .align(geometry, scans[i], found.pose, match_params)
         .filter(|m| {
             m.pose.position().distance_m(&found.pose.position()) <= front.max_refine_shift_m
-        })
-        .map(|m| m.pose);
-    let pose = match refined {
-        Some(p)
-            if crate::correlative::quality(&grid, &points[i], &p)
+        });
+    let (pose, info) = match refined {
+        Some(m)
+            if crate::correlative::quality(&grid, &points[i], &m.pose)
                 >= found.quality - front.max_refine_loss =>
         {
-            p
+            (m.pose, Some(m))
         }
-        _ => found.pose,
+        _ => (found.pose, None),
     };
     tracing::debug!(j, i, quality = found.quality, "loop closure");
-    Some((pose, found.quality))
+    Some((pose, found.quality, info))
 }
 
 #[cfg(test)]

@@ -224,7 +224,12 @@ pub fn run(args: SlamArgs) -> anyhow::Result<()> {
         format!(
             "; against the log's poses: k->k+1 {:.3} m {:.2} deg, ATE {:.3} m",
             e.relative_1.translation_m.mean, e.relative_1.rotation_deg.mean, e.absolute_m.rmse
-        )
+        ) + &e.closures.map_or(String::new(), |c| {
+            format!(
+                ", {} of {} accepted closures more than {} m or {} deg off",
+                c.outside, c.accepted, c.bound_m, c.bound_deg
+            )
+        })
     });
     #[allow(clippy::print_stdout)]
     {
