@@ -56,6 +56,10 @@ pub struct LoopParams {
     pub cauchy_scale: f64,
     /// A closure whose weight under the loss ends below this is counted as rejected.
     pub reject_weight: f64,
+    /// Refuse a match that its ICP refinement does not confirm: the refinement fails (too few
+    /// pairs, poor fit) or ends within the front end's `max_refine_shift_m` of the search's
+    /// pose but fits the submap's field worse (by more than `max_refine_loss`).
+    pub require_refinement: bool,
 }
 
 impl Default for LoopParams {
@@ -79,6 +83,7 @@ impl Default for LoopParams {
             closure_sigma_deg: 0.7,
             cauchy_scale: 1.0,
             reject_weight: 0.3,
+            require_refinement: true,
         }
     }
 }
@@ -130,6 +135,9 @@ impl LoopParams {
 pub struct LoopReport {
     /// Submap matches tried.
     pub tried: usize,
+    /// Matches that scored `min_quality` but that their ICP refinement did not confirm
+    /// (`require_refinement`); they never enter the graph.
+    pub refused: usize,
     /// Matches that scored `min_quality` and entered the graph.
     pub found: usize,
     /// Of those, the ones the optimised graph keeps (weight at least `reject_weight`).
@@ -245,22 +253,27 @@ pub fn close_loops(
         let estimate = |s: usize| graph.nodes[s / every].compose(&relative[s]);
         let tried = candidates(&graph.nodes, m, every, params);
         report.tried += tried.len();
-        let matches: Vec<(usize, Pose2, f64, Option<localiser::ScanMatch>)> = tried
-            .into_iter()
-            .filter_map(|j| {
-                let (pose, quality, info) = match_submap(
-                    geometry,
-                    scans,
-                    &points,
-                    &estimate,
-                    (j * every, i),
-                    (front, &match_params, params),
-                )?;
-                Some((j, pose, quality, info))
-            })
-            .collect();
+        let mut matches = Vec::new();
+        for j in tried {
+            match match_submap(
+                geometry,
+                scans,
+                &points,
+                &estimate,
+                (j * every, i),
+                (front, &match_params, params),
+            ) {
+                Some(Match::Found {
+                    pose,
+                    quality,
+                    refinement,
+                }) => matches.push((j, pose, quality, refinement)),
+                Some(Match::Unconfirmed) => report.refused += 1,
+                None => {}
+            }
+        }
         let mut off = false;
-        for (j, pose, quality, info) in matches {
+        for (j, pose, quality, refinement) in matches {
             let measured = graph.nodes[j].inverse().compose(&pose);
             let heading_sigma = closure_heading_sigma(&points[i], params);
             let edge = Edge {
@@ -285,10 +298,10 @@ pub fn close_loops(
                 measured: [measured.x_m, measured.y_m, measured.theta_rad],
                 accepted: true,
                 heading_sigma_deg: heading_sigma.to_degrees(),
-                data_heading_sigma_deg: info
+                data_heading_sigma_deg: refinement
                     .and_then(|m| heading_sigma_of(&m.data_information))
                     .map(f64::to_degrees),
-                data_worst_sigma_m: info.map(|m| m.worst_direction().1),
+                data_worst_sigma_m: refinement.map(|m| m.worst_direction().1),
                 residual_sigmas: [0.0; 3],
                 weight: 1.0,
             });
@@ -371,8 +384,20 @@ fn candidates(nodes: &[Pose2], m: usize, every: usize, params: &LoopParams) -> V
     chosen
 }
 
-/// Scan `i` matched against the submap of the scans around `j` (at their estimates): its
-/// pose and score, when the score reaches `min_quality`.
+/// What a submap match gave.
+enum Match {
+    /// The scan's pose, the search's score and the ICP refinement, when it was kept.
+    Found {
+        pose: Pose2,
+        quality: f64,
+        refinement: Option<localiser::ScanMatch>,
+    },
+    /// The ICP refinement failed, or fits the field worse than the search's pose.
+    Unconfirmed,
+}
+
+/// Scan `i` matched against the submap of the scans around `j` (at their estimates), when
+/// the search's score reaches `min_quality`.
 fn match_submap(
     geometry: &ScanGeometry,
     scans: &[&Scan],
@@ -380,7 +405,7 @@ fn match_submap(
     estimate: &dyn Fn(usize) -> Pose2,
     (j, i): (usize, usize),
     (front, match_params, params): (&FrontEndParams, &MatchParams, &LoopParams),
-) -> Option<(Pose2, f64, Option<localiser::ScanMatch>)> {
+) -> Option<Match> {
     if points[i].len() < front.min_points {
         return None;
     }
@@ -414,22 +439,33 @@ fn match_submap(
         rotation_cost: 0.0,
     };
     let found = search(&grid, &points[i], &estimate(i), &window, params.min_quality)?;
-    let refined = target
-        .align(geometry, scans[i], found.pose, match_params)
-        .filter(|m| {
-            m.pose.position().distance_m(&found.pose.position()) <= front.max_refine_shift_m
-        });
-    let (pose, info) = match refined {
+    let aligned = target.align(geometry, scans[i], found.pose, match_params);
+    let (pose, refinement) = match aligned {
+        // The refinement ran away from the search's pose: that pose stands.
+        Some(m)
+            if m.pose.position().distance_m(&found.pose.position()) > front.max_refine_shift_m =>
+        {
+            (found.pose, None)
+        }
         Some(m)
             if crate::correlative::quality(&grid, &points[i], &m.pose)
                 >= found.quality - front.max_refine_loss =>
         {
             (m.pose, Some(m))
         }
+        // The refinement failed, or fits the field worse: the data do not confirm the match.
+        _ if params.require_refinement => {
+            tracing::debug!(j, i, quality = found.quality, "loop closure refused");
+            return Some(Match::Unconfirmed);
+        }
         _ => (found.pose, None),
     };
     tracing::debug!(j, i, quality = found.quality, "loop closure");
-    Some((pose, found.quality, info))
+    Some(Match::Found {
+        pose,
+        quality: found.quality,
+        refinement,
+    })
 }
 
 #[cfg(test)]
@@ -448,5 +484,95 @@ mod tests {
         let s = closure_heading_sigma(&far, &params);
         assert!((s - 0.7f64.to_radians()).abs() < 1e-12, "{s}");
         assert!((closure_heading_sigma(&[], &params) - 0.7f64.to_radians()).abs() < 1e-12);
+    }
+
+    /// A corridor 10 m long with doors every 2 m on both walls looks the same from x = 3 m
+    /// and x = 5 m: a scan matched there gives a closure that is right in heading and 2 m
+    /// wrong along the corridor. Against the true closures of the way back, the Cauchy loss
+    /// weighs it below `reject_weight`, so it is counted as rejected and leaves the poses.
+    #[test]
+    fn a_misleading_closure_in_a_symmetric_corridor_is_rejected() {
+        use crate::graph::{Edge, OptimiseParams, PoseGraph};
+        use std::f64::consts::PI;
+        let params = LoopParams::default();
+        // Out along x at 1 m steps (nodes 0..=10, heading 0), a half turn in place (node 11
+        // at x = 10, heading pi), back (nodes 12..=21 at x = 9..=0).
+        let mut truth: Vec<Pose2> = (0..=10).map(|k| Pose2::new(k as f64, 0.0, 0.0)).collect();
+        truth.extend((0..=10).map(|k| Pose2::new(10.0 - k as f64, 0.0, PI)));
+        let at = |x: f64, back: bool| {
+            truth
+                .iter()
+                .position(|p| (p.x_m - x).abs() < 1e-9 && (p.theta_rad.abs() > 1.0) == back)
+                .unwrap()
+        };
+        let mut g = PoseGraph::new(truth.clone());
+        // Front-end steps, exact, with close_loops' standard deviations for a 1 m step of
+        // `every` = 3 scans: 0.005 sqrt(3) + 0.015 = 0.0237 m and 0.1 sqrt(3) + 0.6 = 0.77 deg
+        // (the half turn adds 2 % of pi: 4.4 deg).
+        for k in 0..truth.len() - 1 {
+            let step = truth[k].inverse().compose(&truth[k + 1]);
+            let turn = 0.773f64.to_radians() + 0.02 * step.theta_rad.abs();
+            g.add_edge(Edge {
+                from: k,
+                to: k + 1,
+                measured: step,
+                sigma: [0.0237, 0.0237, turn],
+                robust: false,
+            })
+            .unwrap();
+        }
+        // True closures: each node of the way back seen from the outbound node at the same
+        // place, turned by pi; standard deviations of a closure: 0.09 m and 1.2 deg.
+        let closure = |from: usize, to: usize, measured: Pose2| Edge {
+            from,
+            to,
+            measured,
+            sigma: [0.09, 0.09, 1.2f64.to_radians()],
+            robust: true,
+        };
+        for x in 0..=8 {
+            let x = x as f64;
+            g.add_edge(closure(at(x, false), at(x, true), Pose2::new(0.0, 0.0, PI)))
+                .unwrap();
+        }
+        // The misleading one: the way back at x = 3 matched to the outbound scan at x = 5,
+        // which looks the same. The truth is (-2, 0, pi) in node 5's frame: 2 m off, 22
+        // standard deviations, so its weight is about 1 / (1 + 22.2^2) = 0.002.
+        let wrong = closure(at(5.0, false), at(3.0, true), Pose2::new(0.0, 0.0, PI));
+        g.add_edge(wrong).unwrap();
+        let mut plain = g.clone();
+        for e in &mut plain.edges {
+            e.robust = false;
+        }
+        let optimise = OptimiseParams {
+            cauchy_scale: params.cauchy_scale,
+            ..OptimiseParams::default()
+        };
+        g.optimise(&optimise).unwrap();
+        plain.optimise(&optimise).unwrap();
+        let worst = |g: &PoseGraph| {
+            g.nodes
+                .iter()
+                .zip(&truth)
+                .map(|(a, b)| a.position().distance_m(&b.position()))
+                .fold(0.0, f64::max)
+        };
+        // Without the loss the false closure pulls the way back by decimetres; with it, by
+        // millimetres.
+        assert!(worst(&plain) > 0.1, "{}", worst(&plain));
+        assert!(worst(&g) < 0.005, "{}", worst(&g));
+        let weights: Vec<f64> = g
+            .edges
+            .iter()
+            .filter(|e| e.robust)
+            .map(|e| g.weight(e, &optimise))
+            .collect();
+        let (false_weight, true_weights) = weights.split_last().unwrap();
+        assert!((false_weight - 1.0 / (1.0 + (2.0f64 / 0.09).powi(2))).abs() < 5e-4);
+        assert!(*false_weight < params.reject_weight, "{false_weight}");
+        assert!(
+            true_weights.iter().all(|w| *w >= params.reject_weight),
+            "{true_weights:?}"
+        );
     }
 }
