@@ -152,7 +152,14 @@ pub fn run_log_live(
         };
         progress.tick();
         let placed = run.placed().len();
-        run.add(rec.line, &rec.geometry, &rec.scan, rec.pose);
+        // The reference: a simulated recording's true pose, else the log's own (CARMEN's
+        // corrected pose, or a recording's estimate).
+        run.add(
+            rec.line,
+            &rec.geometry,
+            &rec.scan,
+            rec.true_pose.or(rec.pose),
+        );
         if let Some(v) = live.as_deref_mut() {
             let estimate = run.placed().get(placed).map(|p| p.pose);
             v.scan(&rec.geometry, &rec.scan, estimate, None);
