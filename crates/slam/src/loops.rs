@@ -60,6 +60,9 @@ pub struct LoopParams {
     /// pairs, poor fit) or ends within the front end's `max_refine_shift_m` of the search's
     /// pose but fits the submap's field worse (by more than `max_refine_loss`).
     pub require_refinement: bool,
+    /// Refuse a match whose candidate scan, at its estimate, scores below `min_quality`
+    /// against the other scans of its submap (the front end misplaced it).
+    pub check_candidate: bool,
 }
 
 impl Default for LoopParams {
@@ -84,6 +87,7 @@ impl Default for LoopParams {
             cauchy_scale: 1.0,
             reject_weight: 0.3,
             require_refinement: true,
+            check_candidate: true,
         }
     }
 }
@@ -138,6 +142,9 @@ pub struct LoopReport {
     /// Matches that scored `min_quality` but that their ICP refinement did not confirm
     /// (`require_refinement`); they never enter the graph.
     pub refused: usize,
+    /// Matches that scored `min_quality` but whose candidate scan does not fit its submap
+    /// neighbours (`check_candidate`); they never enter the graph.
+    pub misplaced_candidates: usize,
     /// Matches that scored `min_quality` and entered the graph.
     pub found: usize,
     /// Of those, the ones the optimised graph keeps (weight at least `reject_weight`).
@@ -269,6 +276,7 @@ pub fn close_loops(
                     refinement,
                 }) => matches.push((j, pose, quality, refinement)),
                 Some(Match::Unconfirmed) => report.refused += 1,
+                Some(Match::Misplaced) => report.misplaced_candidates += 1,
                 None => {}
             }
         }
@@ -394,6 +402,8 @@ enum Match {
     },
     /// The ICP refinement failed, or fits the field worse than the search's pose.
     Unconfirmed,
+    /// The candidate's own scan does not fit its neighbours at its estimate.
+    Misplaced,
 }
 
 /// Scan `i` matched against the submap of the scans around `j` (at their estimates), when
@@ -460,6 +470,39 @@ fn match_submap(
         }
         _ => (found.pose, None),
     };
+    if params.check_candidate {
+        // A closure is measured from the candidate's estimate, so a candidate the front end
+        // misplaced carries its error into it: its scan must fit its neighbours in the
+        // submap, at its estimate, as well as a match must.
+        let mut others = Vec::new();
+        for k in (lo..=hi).filter(|&k| k != j) {
+            let pose = estimate(k);
+            let (s, c) = pose.theta_rad.sin_cos();
+            others.extend(points[k].iter().map(|p| {
+                [
+                    pose.x_m + c * p[0] - s * p[1],
+                    pose.y_m + s * p[0] + c * p[1],
+                ]
+            }));
+        }
+        let neighbours = ScoreGrid::new(
+            &others,
+            front.resolution_m,
+            front.smoothing_m,
+            front.depth,
+            1,
+        )?;
+        let fit = crate::correlative::quality(&neighbours, &points[j], &estimate(j));
+        if fit < params.min_quality {
+            tracing::debug!(
+                j,
+                i,
+                fit,
+                "loop closure refused: the candidate is misplaced"
+            );
+            return Some(Match::Misplaced);
+        }
+    }
     tracing::debug!(j, i, quality = found.quality, "loop closure");
     Some(Match::Found {
         pose,
