@@ -618,4 +618,126 @@ mod tests {
             "{true_weights:?}"
         );
     }
+
+    /// The pose of `b` in the frame of `a`.
+    fn between(a: &Pose2, b: &Pose2) -> Pose2 {
+        a.inverse().compose(b)
+    }
+
+    /// Ranges of `geometry`'s rays from `pose` to the nearest of `walls` (segments).
+    fn ray_cast(geometry: &ScanGeometry, pose: &Pose2, walls: &[[f64; 4]]) -> Vec<f64> {
+        (0..geometry.ray_count)
+            .map(|k| {
+                let a = pose.theta_rad + geometry.bearing_rad(k);
+                let (dy, dx) = a.sin_cos();
+                let mut best = f64::INFINITY;
+                for w in walls {
+                    // pose + t (dx, dy) = w0 + u (w1 - w0), t > 0, 0 <= u <= 1.
+                    let (ex, ey) = (w[2] - w[0], w[3] - w[1]);
+                    let det = ex * dy - dx * ey;
+                    if det.abs() < 1e-12 {
+                        continue;
+                    }
+                    let (qx, qy) = (w[0] - pose.x_m, w[1] - pose.y_m);
+                    let t = (ex * qy - ey * qx) / det;
+                    let u = (dx * qy - dy * qx) / det;
+                    if t > 0.0 && (0.0..=1.0).contains(&u) {
+                        best = best.min(t);
+                    }
+                }
+                best
+            })
+            .collect()
+    }
+
+    /// Two laps around a block in a room with a pillar, scans ray-cast at the true poses; the
+    /// front end's trajectory is the truth but for one scan, turned by 80 deg (as a front end
+    /// misplaces a scan in a fast turn). Closures from that scan would be measured from its
+    /// wrong estimate, 80 deg off: the candidate check refuses them, and every closure left
+    /// agrees with the truth.
+    #[test]
+    fn a_closure_from_a_misplaced_candidate_is_refused() {
+        // Room 12 m x 8 m, a 4 m x 2 m block in the middle, a 0.5 m pillar near a corner.
+        let mut walls = vec![
+            [0.0, 0.0, 12.0, 0.0],
+            [12.0, 0.0, 12.0, 8.0],
+            [12.0, 8.0, 0.0, 8.0],
+            [0.0, 8.0, 0.0, 0.0],
+        ];
+        for (x0, y0, x1, y1) in [(4.0, 3.0, 8.0, 5.0), (10.0, 6.0, 10.5, 6.5)] {
+            walls.extend([
+                [x0, y0, x1, y0],
+                [x1, y0, x1, y1],
+                [x1, y1, x0, y1],
+                [x0, y1, x0, y0],
+            ]);
+        }
+        // Around the block at 1.5 m: 0.25 m steps along the sides, 15 deg turns at corners.
+        let corners: [(f64, f64); 4] = [(2.5, 1.5), (9.5, 1.5), (9.5, 6.5), (2.5, 6.5)];
+        let mut lap = Vec::new();
+        for c in 0..4 {
+            let (x0, y0) = corners[c];
+            let (x1, y1) = corners[(c + 1) % 4];
+            let heading = (y1 - y0).atan2(x1 - x0);
+            let steps = ((x1 - x0).hypot(y1 - y0) / 0.25).round() as usize;
+            for k in 0..steps {
+                let f = k as f64 / steps as f64;
+                lap.push(Pose2::new(x0 + f * (x1 - x0), y0 + f * (y1 - y0), heading));
+            }
+            for k in 1..6 {
+                lap.push(Pose2::new(x1, y1, heading + k as f64 * 15f64.to_radians()));
+            }
+        }
+        let truth: Vec<Pose2> = lap.iter().chain(lap.iter()).copied().collect();
+        let geometry = ScanGeometry::centred(541, 270f64.to_radians(), 0.1, 20.0).unwrap();
+        let scans: Vec<Scan> = truth
+            .iter()
+            .map(|p| Scan::from_ranges(&geometry, &ray_cast(&geometry, p, &walls), 0.0))
+            .collect();
+        let refs: Vec<&Scan> = scans.iter().collect();
+        // Scan 12 (a node: every third scan) on the first side, turned by 80 deg.
+        let bad = 12;
+        let mut poses = truth.clone();
+        poses[bad] = Pose2::new(
+            poses[bad].x_m,
+            poses[bad].y_m,
+            poses[bad].theta_rad + 80f64.to_radians(),
+        );
+        let front = FrontEndParams::default();
+        let run = |check_candidate: bool| {
+            let params = LoopParams {
+                check_candidate,
+                ..LoopParams::default()
+            };
+            close_loops(&geometry, &refs, &poses, &front, &params)
+                .unwrap()
+                .1
+        };
+        let error = |c: &Closure| {
+            let got = Pose2::new(c.measured[0], c.measured[1], c.measured[2]);
+            let e = between(&between(&truth[c.from], &truth[c.to]), &got);
+            (e.x_m.hypot(e.y_m), e.theta_rad.abs().to_degrees())
+        };
+        let without = run(false);
+        let from_bad: Vec<(f64, f64)> = without
+            .closures
+            .iter()
+            .filter(|c| c.from == bad)
+            .map(error)
+            .collect();
+        assert!(!from_bad.is_empty(), "{without:?}");
+        // Measured from the turned estimate: 80 deg off.
+        assert!(
+            from_bad.iter().all(|(_, deg)| (deg - 80.0).abs() < 2.0),
+            "{from_bad:?}"
+        );
+        let with = run(true);
+        assert_eq!(with.misplaced_candidates, from_bad.len(), "{with:?}");
+        assert!(with.closures.iter().all(|c| c.from != bad));
+        assert!(with.accepted > 0);
+        for c in with.closures.iter().filter(|c| c.accepted) {
+            let (m, deg) = error(c);
+            assert!(m <= 0.05 && deg <= 1.0, "{c:?}: {m} m {deg} deg");
+        }
+    }
 }
