@@ -392,6 +392,15 @@ fn candidates(nodes: &[Pose2], m: usize, every: usize, params: &LoopParams) -> V
     chosen
 }
 
+/// The scan-frame `points` of a scan at `pose`, in the world frame.
+fn in_world(pose: Pose2, points: &[[f64; 2]]) -> impl Iterator<Item = [f64; 2]> {
+    let (s, c) = pose.theta_rad.sin_cos();
+    let (x, y) = (pose.x_m, pose.y_m);
+    points
+        .iter()
+        .map(move |p| [x + c * p[0] - s * p[1], y + s * p[0] + c * p[1]])
+}
+
 /// What a submap match gave.
 enum Match {
     /// The scan's pose, the search's score and the ICP refinement, when it was kept.
@@ -425,13 +434,7 @@ fn match_submap(
     let mut target = MatchTarget::new();
     for k in lo..=hi {
         let pose = estimate(k);
-        let (s, c) = pose.theta_rad.sin_cos();
-        world.extend(points[k].iter().map(|p| {
-            [
-                pose.x_m + c * p[0] - s * p[1],
-                pose.y_m + s * p[0] + c * p[1],
-            ]
-        }));
+        world.extend(in_world(pose, &points[k]));
         target.add_scan(&pose, geometry, scans[k], match_params);
     }
     let window_cells = (params.linear_window_m / front.resolution_m).ceil() as usize + 1;
@@ -474,17 +477,10 @@ fn match_submap(
         // A closure is measured from the candidate's estimate, so a candidate the front end
         // misplaced carries its error into it: its scan must fit its neighbours in the
         // submap, at its estimate, as well as a match must.
-        let mut others = Vec::new();
-        for k in (lo..=hi).filter(|&k| k != j) {
-            let pose = estimate(k);
-            let (s, c) = pose.theta_rad.sin_cos();
-            others.extend(points[k].iter().map(|p| {
-                [
-                    pose.x_m + c * p[0] - s * p[1],
-                    pose.y_m + s * p[0] + c * p[1],
-                ]
-            }));
-        }
+        let others: Vec<[f64; 2]> = (lo..=hi)
+            .filter(|&k| k != j)
+            .flat_map(|k| in_world(estimate(k), &points[k]))
+            .collect();
         let neighbours = ScoreGrid::new(
             &others,
             front.resolution_m,
