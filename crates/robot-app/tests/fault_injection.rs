@@ -6,7 +6,7 @@
 use std::io::{BufRead, BufReader, Write};
 use std::path::Path;
 use std::process::{Child, ChildStdin, ChildStdout, Command, ExitStatus, Stdio};
-use std::sync::Arc;
+use std::sync::{Arc, RwLock, RwLockReadGuard, RwLockWriteGuard};
 use std::time::Duration;
 
 use scan_types::{MotionBase, WorldPoint};
@@ -16,7 +16,19 @@ use urg_driver::{Fault, Model, Profile, PtyServer};
 /// A goal two legs from the paper's start (about 70 scans): quick over a 10 Hz sensor.
 const GOAL: (f64, f64) = (-1.0, -3.0);
 
+/// Pseudo-terminals are numbered by the system and reused: while one test's sensor is
+/// unplugged, another test's new terminal could take its number. The unplugging test runs
+/// alone (write lock); the others share (read lock).
+static PTYS: RwLock<()> = RwLock::new(());
+
+/// This test's hold on [`PTYS`].
+enum PtyHold {
+    Shared(#[allow(dead_code)] RwLockReadGuard<'static, ()>),
+    Alone(#[allow(dead_code)] RwLockWriteGuard<'static, ()>),
+}
+
 struct Harness {
+    _pty: PtyHold,
     child: Child,
     to_app: ChildStdin,
     from_app: BufReader<ChildStdout>,
@@ -30,6 +42,17 @@ struct Harness {
 
 impl Harness {
     fn start(gains: BaseGains, extra: &[&str]) -> Harness {
+        let hold = PtyHold::Shared(PTYS.read().unwrap_or_else(|e| e.into_inner()));
+        Self::start_holding(hold, gains, extra)
+    }
+
+    /// [`Harness::start`] with no other test's terminal opened or closed until it ends.
+    fn start_alone(gains: BaseGains, extra: &[&str]) -> Harness {
+        let hold = PtyHold::Alone(PTYS.write().unwrap_or_else(|e| e.into_inner()));
+        Self::start_holding(hold, gains, extra)
+    }
+
+    fn start_holding(hold: PtyHold, gains: BaseGains, extra: &[&str]) -> Harness {
         let preset = SensorPreset::Urg04lx;
         let sim = Simulation::new(
             Arc::new(World::paper()),
@@ -68,6 +91,7 @@ impl Harness {
         let to_app = child.stdin.take().unwrap();
         let from_app = BufReader::new(child.stdout.take().unwrap());
         Harness {
+            _pty: hold,
             child,
             to_app,
             from_app,
@@ -214,7 +238,7 @@ fn no_fault_reaches_the_goal() {
 
 #[test]
 fn unplug_and_replug_mid_leg_is_survived() {
-    let mut h = Harness::start(BaseGains::default(), &[]);
+    let mut h = Harness::start_alone(BaseGains::default(), &[]);
     h.drive(|n, h| {
         if n == 10 {
             // Mid-leg: the sensor is gone for 2 s, then back behind the same path.
@@ -334,6 +358,62 @@ fn sigint_stops_the_base_writes_everything_and_exits_130() {
     }
     assert!(scans > 0);
     assert_no_partial_files(rec.path());
+}
+
+#[test]
+fn ctrl_c_with_slam_map_still_maps_the_run_from_its_scans() {
+    let mut h = Harness::start(BaseGains::default(), &["--slam-map"]);
+    let pid = nix::unistd::Pid::from_raw(i32::try_from(h.child.id()).unwrap());
+    h.drive(|n, _| {
+        if n == 20 {
+            nix::sys::signal::kill(pid, nix::sys::signal::Signal::SIGINT).unwrap();
+        }
+    });
+    // Where the simulated robot ended, in the frame of its start (the first scan's).
+    let moved = paper_start().inverse().compose(&h.truth.pose());
+    let end = h.finish();
+    assert_eq!(
+        end.status.code(),
+        Some(130),
+        "stderr:
+{}",
+        end.stderr
+    );
+    assert_eq!(end.reason(), "interrupted");
+    end.assert_clean_end();
+    let run = end.dir.path().join("run");
+    // Every scan the run read is in its recording, and every one of them was mapped.
+    let mut log = scan_log::open_log(&run.join("run.mcap"), None).expect("the recording opens");
+    let mut scans = 0u64;
+    while scan_types::LaserSource::next_scan(&mut log).is_ok() {
+        scans += 1;
+    }
+    let slam = run.join("slam");
+    let report: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(slam.join("slam.json")).unwrap()).unwrap();
+    assert!(scans > 0);
+    assert_eq!(report["scans"].as_u64(), Some(scans));
+    assert_eq!(report["placed"].as_u64(), Some(scans));
+    for f in ["map.pgm", "map.yaml", "map.png", "trajectory.tum"] {
+        assert!(slam.join(f).metadata().is_ok_and(|m| m.len() > 0), "{f}");
+    }
+    assert_no_partial_files(&slam);
+    // The laser-only estimate of the last scan is within 0.1 m of where the simulator left the
+    // robot, after about 1 m: the last scan can come from before the last motion command
+    // (5 cm earlier in these runs), as the sensor streams on its own clock.
+    let text = std::fs::read_to_string(slam.join("trajectory.tum")).unwrap();
+    let last: Vec<f64> = text
+        .lines()
+        .last()
+        .unwrap()
+        .split_whitespace()
+        .map(|v| v.parse().unwrap())
+        .collect();
+    let off = (last[1] - moved.x_m).hypot(last[2] - moved.y_m);
+    assert!(
+        moved.x_m.hypot(moved.y_m) > 0.8 && off < 0.1,
+        "moved {moved:?}, estimate {last:?}"
+    );
 }
 
 #[test]

@@ -160,13 +160,17 @@ pub fn align_se2(est: &[Pose2], reference: &[Pose2]) -> Result<Pose2, SlamError>
 /// The absolute trajectory error: position error (metres) of every pose of `est` after the
 /// SE(2) alignment onto `reference`.
 pub fn absolute_error(est: &[Pose2], reference: &[Pose2]) -> Result<Stats, SlamError> {
+    Ok(Stats::of(&absolute_errors(est, reference)?))
+}
+
+/// The position error of each pose after the SE(2) alignment of [`absolute_error`], metres.
+pub fn absolute_errors(est: &[Pose2], reference: &[Pose2]) -> Result<Vec<f64>, SlamError> {
     let a = align_se2(est, reference)?;
-    let errors: Vec<f64> = est
+    Ok(est
         .iter()
         .zip(reference)
         .map(|(e, r)| a.compose(e).position().distance_m(&r.position()))
-        .collect();
-    Ok(Stats::of(&errors))
+        .collect())
 }
 
 /// Accepted loop closures against reference poses: how many lie outside the bounds.
@@ -312,5 +316,22 @@ mod tests {
             0
         );
         assert!(closure_check(&[(0, 2, Pose2::default())], &reference, 0.2, 2.0).is_none());
+    }
+
+    #[test]
+    fn per_pose_errors_after_the_alignment() {
+        // The estimate (0, 0.05) .. (2, -0.05) against the reference (0, 0) .. (2, 0).
+        let reference = [Pose2::new(0.0, 0.0, 0.0), Pose2::new(2.0, 0.0, 0.0)];
+        let est = [Pose2::new(0.0, 0.05, 0.0), Pose2::new(2.0, -0.05, 0.0)];
+        let e = absolute_errors(&est, &reference).unwrap();
+        assert_eq!(e.len(), 2);
+        // The fit rotates the estimate onto the line: the chord of length sqrt(4 + 0.01)
+        // centred on (1, 0), so each end lies (sqrt(4.01) - 2) / 2 m beyond its reference.
+        let off = (4.01f64.sqrt() - 2.0) / 2.0;
+        assert!(
+            (e[0] - off).abs() < 1e-9 && (e[1] - off).abs() < 1e-9,
+            "{e:?}"
+        );
+        assert!((absolute_error(&est, &reference).unwrap().rmse - off).abs() < 1e-9);
     }
 }

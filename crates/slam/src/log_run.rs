@@ -8,7 +8,7 @@ use scan_types::{Pose2, Scan, ScanGeometry};
 use serde::Serialize;
 
 use crate::eval::{
-    ClosureCheck, RelativeError, Stats, absolute_error, closure_check, relative_error,
+    ClosureCheck, RelativeError, Stats, absolute_errors, closure_check, relative_error,
 };
 use crate::{FrontEnd, FrontEndParams, LoopParams, LoopReport, Placement, SlamError, close_loops};
 
@@ -78,6 +78,8 @@ pub struct Evaluation {
     pub relative_10: Option<RelativeError>,
     /// Position error after an SE(2) alignment, metres.
     pub absolute_m: Stats,
+    /// The last placed scan's position error after that alignment, metres.
+    pub final_position_error_m: f64,
     /// Accepted loop closures against the reference relative poses (0.2 m, 2 deg), when loop
     /// closure ran.
     pub closures: Option<ClosureCheck>,
@@ -278,10 +280,12 @@ fn percentile(v: &mut [f64], q: f64) -> f64 {
 fn evaluate(placed: &[Placed], loops: Option<&LoopReport>) -> Option<Evaluation> {
     let reference: Vec<Pose2> = placed.iter().map(|p| p.reference).collect::<Option<_>>()?;
     let est: Vec<Pose2> = placed.iter().map(|p| p.pose).collect();
+    let absolute = absolute_errors(&est, &reference).ok()?;
     Some(Evaluation {
         relative_1: relative_error(&est, &reference, 1).ok()?,
         relative_10: relative_error(&est, &reference, 10).ok(),
-        absolute_m: absolute_error(&est, &reference).ok()?,
+        absolute_m: Stats::of(&absolute),
+        final_position_error_m: *absolute.last()?,
         closures: loops.and_then(|l| {
             let accepted: Vec<(usize, usize, Pose2)> = l
                 .closures

@@ -199,6 +199,7 @@ pub fn run(args: ExploreArgs) -> anyhow::Result<()> {
         );
     }
     explored.recorded?;
+    args.options.write_slam_map(&config)?;
     if summary.reason == Reason::Interrupted {
         return Err(crate::interrupt::Interrupted.into());
     }
@@ -289,11 +290,10 @@ impl Recording {
         scan_period_s: Option<f64>,
     ) -> anyhow::Result<Self> {
         let recorder = options
-            .record
-            .as_deref()
+            .record_path()
             .map(|p| {
-                crate::record::Recorder::create_profile(p, geometry, options.profile)
-                    .map(|r| (r.with_scan_period(scan_period_s), p.to_path_buf()))
+                crate::record::Recorder::create_profile(&p, geometry, options.profile)
+                    .map(|r| (r.with_scan_period(scan_period_s), p.clone()))
                     .with_context(|| format!("cannot record to {}", p.display()))
             })
             .transpose()?;

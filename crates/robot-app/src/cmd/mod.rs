@@ -41,7 +41,14 @@ pub struct LoopOptions {
     /// messages: /scan, poses, /tf and /map, for ros2 bag, rosbags, Foxglove).
     #[arg(long, value_enum, default_value = "foxglove", requires = "record")]
     pub profile: crate::record::RecordProfile,
+    /// After the run, map it with laser-only SLAM (as `robot-app slam`, loop closure on) from
+    /// every scan it read, into OUT/slam/; records to OUT/run.mcap unless --record is given.
+    #[arg(long)]
+    pub slam_map: bool,
 }
+
+/// Turns larger than this between two scans are flagged for `--slam-map`, degrees.
+const SLAM_MAP_MAX_CHUNK_DEG: f64 = 30.0;
 
 impl LoopOptions {
     /// Loads the configuration, creates the output folder and writes the configuration used
@@ -55,6 +62,43 @@ impl LoopOptions {
     /// Loads the configuration (`--config` over the `--method` preset).
     pub fn load(&self) -> anyhow::Result<Params> {
         crate::config::load(self.config.as_deref(), self.method)
+    }
+
+    /// The file to record to: `--record`'s, or `OUT/run.mcap` with `--slam-map`.
+    pub fn record_path(&self) -> Option<PathBuf> {
+        self.record
+            .clone()
+            .or_else(|| self.slam_map.then(|| self.out.join("run.mcap")))
+    }
+
+    /// With `--slam-map`: maps the run's recording as `robot-app slam` does (default
+    /// parameters, 0.05 m cells, rays up to 20 m) into `OUT/slam/`.
+    pub fn write_slam_map(&self, config: &Params) -> anyhow::Result<()> {
+        let (true, Some(path)) = (self.slam_map, self.record_path()) else {
+            return Ok(());
+        };
+        let chunk = config.navigator.rotation_chunk_deg;
+        if chunk > SLAM_MAP_MAX_CHUNK_DEG {
+            tracing::warn!(
+                "--slam-map: the robot turns up to {chunk} deg between two scans \
+                 ([navigator] rotation_chunk_deg); a scan matcher can mistake such a turn in a \
+                 square room, set it to 20 for a reliable map"
+            );
+        }
+        let (front, loops) = slam::load_params(None)?;
+        let mut run = slam::run_log(&path, &front, Some(&loops))
+            .with_context(|| format!("--slam-map: mapping {}", path.display()))?;
+        let dir = self.out.join("slam");
+        slam::write_outputs(&dir, &mut run, 0.05, 20.0)
+            .with_context(|| format!("--slam-map: writing {}", dir.display()))?;
+        let r = &run.report;
+        tracing::info!(
+            placed = r.placed,
+            scans = r.scans,
+            "--slam-map: map and trajectory in {}",
+            dir.display()
+        );
+        Ok(())
     }
 
     /// Creates the output folder and writes `config` into it as `config.toml`.

@@ -61,10 +61,9 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
         .map(|u| u.params().scan_period().as_secs_f64());
     let mut recorder = args
         .options
-        .record
-        .as_deref()
+        .record_path()
         .map(|p| {
-            crate::record::Recorder::create_profile(p, &geometry, args.options.profile)
+            crate::record::Recorder::create_profile(&p, &geometry, args.options.profile)
                 .map(|r| r.with_scan_period(scan_period_s))
                 .with_context(|| format!("cannot record to {}", p.display()))
         })
@@ -133,6 +132,7 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
     if let Some(e) = record_error {
         bail!("recording failed: {e}");
     }
+    args.options.write_slam_map(&config)?;
     if run.summary.reason == Reason::Interrupted {
         return Err(crate::interrupt::Interrupted.into());
     }

@@ -308,11 +308,8 @@ pub fn run(args: SimArgs) -> anyhow::Result<()> {
         .live
         .start(spec.config.localiser.map_resolution_m)?
         .map(|v| v.with_goal(goal));
-    let record = args
-        .options
-        .record
-        .as_deref()
-        .map(|p| (p, args.options.profile));
+    let record_path = args.options.record_path();
+    let record = record_path.as_deref().map(|p| (p, args.options.profile));
     let run = run_with(&spec, record, live.as_mut())?;
     if let Some(v) = live {
         v.finish(Some(&run.outcome.grid));
@@ -344,6 +341,7 @@ pub fn run(args: SimArgs) -> anyhow::Result<()> {
             args.options.out.display()
         );
     }
+    args.options.write_slam_map(&spec.config)?;
     if s.reason == Reason::Interrupted {
         return Err(crate::interrupt::Interrupted.into());
     }

@@ -152,8 +152,7 @@ pub fn run_log_live(
         };
         progress.tick();
         let placed = run.placed().len();
-        // The reference: a simulated recording's true pose, else the log's own (CARMEN's
-        // corrected pose, or a recording's estimate).
+        // The simulator's truth, where the log has it, is the better reference.
         run.add(
             rec.line,
             &rec.geometry,
@@ -229,8 +228,11 @@ pub fn run(args: SlamArgs) -> anyhow::Result<()> {
     });
     let eval = r.evaluation.as_ref().map_or(String::new(), |e| {
         format!(
-            "; against the log's poses: k->k+1 {:.3} m {:.2} deg, ATE {:.3} m",
-            e.relative_1.translation_m.mean, e.relative_1.rotation_deg.mean, e.absolute_m.rmse
+            "; against the log's reference poses: k->k+1 {:.3} m {:.2} deg, ATE {:.3} m, final error {:.3} m",
+            e.relative_1.translation_m.mean,
+            e.relative_1.rotation_deg.mean,
+            e.absolute_m.rmse,
+            e.final_position_error_m
         ) + &e.closures.map_or(String::new(), |c| {
             format!(
                 ", {} of {} accepted closures more than {} m or {} deg off",
