@@ -325,6 +325,13 @@ fn aces_closures_agree_with_the_reference_poses() {
     let run = slam(&p);
     let l = run.report.loop_closure.as_ref().unwrap();
     assert!(l.accepted > 0, "{l:?}");
+    // slam.json's count says the same as the check below.
+    let check = run.report.evaluation.as_ref().unwrap().closures.unwrap();
+    assert_eq!(
+        (check.accepted, check.outside),
+        (l.accepted, 0),
+        "{check:?}"
+    );
     for c in l.closures.iter().filter(|c| c.accepted) {
         let (a, b) = (&run.placed[c.from], &run.placed[c.to]);
         let want = relative(&a.reference.unwrap(), &b.reference.unwrap());

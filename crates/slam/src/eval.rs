@@ -173,6 +173,59 @@ pub fn absolute_errors(est: &[Pose2], reference: &[Pose2]) -> Result<Vec<f64>, S
         .collect())
 }
 
+/// Accepted loop closures against reference poses: how many lie outside the bounds.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct ClosureCheck {
+    /// Accepted closures checked.
+    pub accepted: usize,
+    /// Bound on the translation error, metres.
+    pub bound_m: f64,
+    /// Bound on the heading error, degrees.
+    pub bound_deg: f64,
+    /// Accepted closures more than `bound_m` or `bound_deg` off the reference relative pose.
+    pub outside: usize,
+    /// Of those, the ones within `bound_m` (outside by their heading only).
+    pub outside_heading_only: usize,
+    /// Largest translation error of an accepted closure, metres.
+    pub worst_m: f64,
+    /// Largest heading error of an accepted closure, degrees.
+    pub worst_deg: f64,
+}
+
+/// Checks each accepted closure `(from, to, measured)` (the pose of scan `to` in the frame of
+/// scan `from`) against the relative pose of `reference[from]` and `reference[to]`; `None`
+/// when a closure names a scan without a reference pose.
+pub fn closure_check(
+    closures: &[(usize, usize, Pose2)],
+    reference: &[Pose2],
+    bound_m: f64,
+    bound_deg: f64,
+) -> Option<ClosureCheck> {
+    let mut c = ClosureCheck {
+        accepted: closures.len(),
+        bound_m,
+        bound_deg,
+        outside: 0,
+        outside_heading_only: 0,
+        worst_m: 0.0,
+        worst_deg: 0.0,
+    };
+    for (from, to, measured) in closures {
+        let want = reference.get(*from)?.inverse().compose(reference.get(*to)?);
+        let e = want.inverse().compose(measured);
+        let (m, deg) = (e.x_m.hypot(e.y_m), e.theta_rad.abs().to_degrees());
+        c.worst_m = c.worst_m.max(m);
+        c.worst_deg = c.worst_deg.max(deg);
+        if m > bound_m || deg > bound_deg {
+            c.outside += 1;
+            if m <= bound_m {
+                c.outside_heading_only += 1;
+            }
+        }
+    }
+    Some(c)
+}
+
 /// The heading difference of two poses, degrees (for reports).
 pub fn heading_error_deg(a: &Pose2, b: &Pose2) -> f64 {
     angle_diff_rad(a.theta_rad, b.theta_rad).abs().to_degrees()
@@ -231,6 +284,38 @@ mod tests {
         assert!(
             (est[0].position().distance_m(&reference[0].position()) - 5f64.sqrt()).abs() < 1e-12
         );
+    }
+
+    #[test]
+    fn closures_outside_the_bounds_are_counted() {
+        // References: scan 1 is 2 m ahead of scan 0, turned 90 deg.
+        let reference = [
+            Pose2::new(0.0, 0.0, 0.0),
+            Pose2::new(2.0, 0.0, std::f64::consts::FRAC_PI_2),
+        ];
+        let turn = std::f64::consts::FRAC_PI_2;
+        let closures = [
+            // Exact.
+            (0, 1, Pose2::new(2.0, 0.0, turn)),
+            // 0.1 m and 1.5 deg off: inside.
+            (0, 1, Pose2::new(2.1, 0.0, turn + 1.5f64.to_radians())),
+            // 0.3 m off.
+            (0, 1, Pose2::new(2.0, 0.3, turn)),
+            // 2.5 deg off, position exact: outside by its heading only.
+            (0, 1, Pose2::new(2.0, 0.0, turn - 2.5f64.to_radians())),
+        ];
+        let c = closure_check(&closures, &reference, 0.2, 2.0).unwrap();
+        assert_eq!((c.accepted, c.outside, c.outside_heading_only), (4, 2, 1));
+        assert!((c.worst_m - 0.3).abs() < 1e-9, "{c:?}");
+        assert!((c.worst_deg - 2.5).abs() < 1e-9, "{c:?}");
+        // Seen from scan 1, scan 0 is 2 m behind and turned -90 deg: (0, 2, -90 deg) in
+        // scan 1's frame (x ahead is +y of the world).
+        let back = [(1, 0, Pose2::new(0.0, 2.0, -turn))];
+        assert_eq!(
+            closure_check(&back, &reference, 0.2, 2.0).unwrap().outside,
+            0
+        );
+        assert!(closure_check(&[(0, 2, Pose2::default())], &reference, 0.2, 2.0).is_none());
     }
 
     #[test]

@@ -7,7 +7,9 @@ use std::time::Instant;
 use scan_types::{Pose2, Scan, ScanGeometry};
 use serde::Serialize;
 
-use crate::eval::{RelativeError, Stats, absolute_errors, relative_error};
+use crate::eval::{
+    ClosureCheck, RelativeError, Stats, absolute_errors, closure_check, relative_error,
+};
 use crate::{FrontEnd, FrontEndParams, LoopParams, LoopReport, Placement, SlamError, close_loops};
 
 /// One placed scan.
@@ -78,6 +80,9 @@ pub struct Evaluation {
     pub absolute_m: Stats,
     /// The last placed scan's position error after that alignment, metres.
     pub final_position_error_m: f64,
+    /// Accepted loop closures against the reference relative poses (0.2 m, 2 deg), when loop
+    /// closure ran.
+    pub closures: Option<ClosureCheck>,
 }
 
 /// A finished run.
@@ -219,7 +224,7 @@ impl LogRun {
                 .map(|w| w[0].pose.position().distance_m(&w[1].pose.position()))
                 .sum(),
             map_consistency_share: 0.0,
-            evaluation: evaluate(&placed),
+            evaluation: evaluate(&placed, loop_closure.as_ref()),
             loop_closure,
             loop_params: None,
             params: fe.params().clone(),
@@ -272,7 +277,7 @@ fn percentile(v: &mut [f64], q: f64) -> f64 {
     v[((v.len() - 1) as f64 * q).round() as usize]
 }
 
-fn evaluate(placed: &[Placed]) -> Option<Evaluation> {
+fn evaluate(placed: &[Placed], loops: Option<&LoopReport>) -> Option<Evaluation> {
     let reference: Vec<Pose2> = placed.iter().map(|p| p.reference).collect::<Option<_>>()?;
     let est: Vec<Pose2> = placed.iter().map(|p| p.pose).collect();
     let absolute = absolute_errors(&est, &reference).ok()?;
@@ -281,5 +286,20 @@ fn evaluate(placed: &[Placed]) -> Option<Evaluation> {
         relative_10: relative_error(&est, &reference, 10).ok(),
         absolute_m: Stats::of(&absolute),
         final_position_error_m: *absolute.last()?,
+        closures: loops.and_then(|l| {
+            let accepted: Vec<(usize, usize, Pose2)> = l
+                .closures
+                .iter()
+                .filter(|c| c.accepted)
+                .map(|c| {
+                    (
+                        c.from,
+                        c.to,
+                        Pose2::new(c.measured[0], c.measured[1], c.measured[2]),
+                    )
+                })
+                .collect();
+            closure_check(&accepted, &reference, 0.2, 2.0)
+        }),
     })
 }

@@ -56,6 +56,13 @@ pub struct LoopParams {
     pub cauchy_scale: f64,
     /// A closure whose weight under the loss ends below this is counted as rejected.
     pub reject_weight: f64,
+    /// Refuse a match that its ICP refinement does not confirm: the refinement fails (too few
+    /// pairs, poor fit) or ends within the front end's `max_refine_shift_m` of the search's
+    /// pose but fits the submap's field worse (by more than `max_refine_loss`).
+    pub require_refinement: bool,
+    /// Refuse a match whose candidate scan, at its estimate, scores below `min_quality`
+    /// against the other scans of its submap (the front end misplaced it).
+    pub check_candidate: bool,
 }
 
 impl Default for LoopParams {
@@ -79,6 +86,8 @@ impl Default for LoopParams {
             closure_sigma_deg: 0.7,
             cauchy_scale: 1.0,
             reject_weight: 0.3,
+            require_refinement: true,
+            check_candidate: true,
         }
     }
 }
@@ -130,6 +139,12 @@ impl LoopParams {
 pub struct LoopReport {
     /// Submap matches tried.
     pub tried: usize,
+    /// Matches that scored `min_quality` but that their ICP refinement did not confirm
+    /// (`require_refinement`); they never enter the graph.
+    pub refused: usize,
+    /// Matches that scored `min_quality` but whose candidate scan does not fit its submap
+    /// neighbours (`check_candidate`); they never enter the graph.
+    pub misplaced_candidates: usize,
     /// Matches that scored `min_quality` and entered the graph.
     pub found: usize,
     /// Of those, the ones the optimised graph keeps (weight at least `reject_weight`).
@@ -168,6 +183,17 @@ pub struct Closure {
     pub measured: [f64; 3],
     /// Kept by the optimised graph.
     pub accepted: bool,
+    /// Standard deviation of its heading in the graph, degrees.
+    pub heading_sigma_deg: f64,
+    /// Heading standard deviation from the ICP refinement's data alone, degrees (`None`: the
+    /// refinement was not kept).
+    pub data_heading_sigma_deg: Option<f64>,
+    /// Worst position standard deviation from the ICP refinement's data alone, metres.
+    pub data_worst_sigma_m: Option<f64>,
+    /// Its residual against the optimised graph, in standard deviations (x, y, heading).
+    pub residual_sigmas: [f64; 3],
+    /// Its weight under the loss in the optimised graph.
+    pub weight: f64,
 }
 
 /// The front end's trajectory `poses` (of `scans`, all of `geometry`) corrected by loop
@@ -234,23 +260,30 @@ pub fn close_loops(
         let estimate = |s: usize| graph.nodes[s / every].compose(&relative[s]);
         let tried = candidates(&graph.nodes, m, every, params);
         report.tried += tried.len();
-        let matches: Vec<(usize, Pose2, f64)> = tried
-            .into_iter()
-            .filter_map(|j| {
-                let (pose, quality) = match_submap(
-                    geometry,
-                    scans,
-                    &points,
-                    &estimate,
-                    (j * every, i),
-                    (front, &match_params, params),
-                )?;
-                Some((j, pose, quality))
-            })
-            .collect();
+        let mut matches = Vec::new();
+        for j in tried {
+            match match_submap(
+                geometry,
+                scans,
+                &points,
+                &estimate,
+                (j * every, i),
+                (front, &match_params, params),
+            ) {
+                Some(Match::Found {
+                    pose,
+                    quality,
+                    refinement,
+                }) => matches.push((j, pose, quality, refinement)),
+                Some(Match::Unconfirmed) => report.refused += 1,
+                Some(Match::Misplaced) => report.misplaced_candidates += 1,
+                None => {}
+            }
+        }
         let mut off = false;
-        for (j, pose, quality) in matches {
+        for (j, pose, quality, refinement) in matches {
             let measured = graph.nodes[j].inverse().compose(&pose);
+            let heading_sigma = closure_heading_sigma(&points[i], params);
             let edge = Edge {
                 from: j,
                 to: m,
@@ -258,7 +291,7 @@ pub fn close_loops(
                 sigma: [
                     params.closure_sigma_m,
                     params.closure_sigma_m,
-                    closure_heading_sigma(&points[i], params),
+                    heading_sigma,
                 ],
                 robust: true,
             };
@@ -272,6 +305,13 @@ pub fn close_loops(
                 quality,
                 measured: [measured.x_m, measured.y_m, measured.theta_rad],
                 accepted: true,
+                heading_sigma_deg: heading_sigma.to_degrees(),
+                data_heading_sigma_deg: refinement
+                    .and_then(|m| heading_sigma_of(&m.data_information))
+                    .map(f64::to_degrees),
+                data_worst_sigma_m: refinement.map(|m| m.worst_direction().1),
+                residual_sigmas: [0.0; 3],
+                weight: 1.0,
             });
         }
         if off {
@@ -281,14 +321,11 @@ pub fn close_loops(
     }
     graph.optimise(&optimise)?;
     report.optimisations += 1;
-    let weights: Vec<f64> = graph
-        .edges
-        .iter()
-        .filter(|e| e.robust)
-        .map(|e| graph.weight(e, &optimise))
-        .collect();
-    for (c, w) in report.closures.iter_mut().zip(weights) {
-        c.accepted = w >= params.reject_weight;
+    let robust: Vec<Edge> = graph.edges.iter().filter(|e| e.robust).copied().collect();
+    for (c, e) in report.closures.iter_mut().zip(&robust) {
+        c.weight = graph.weight(e, &optimise);
+        c.residual_sigmas = graph.residual(e);
+        c.accepted = c.weight >= params.reject_weight;
     }
     report.found = report.closures.len();
     report.accepted = report.closures.iter().filter(|c| c.accepted).count();
@@ -320,6 +357,16 @@ fn closure_heading_sigma(points: &[[f64; 2]], params: &LoopParams) -> f64 {
     }
 }
 
+/// The heading standard deviation of an information matrix (x, y, heading), radians.
+fn heading_sigma_of(h: &[[f64; 3]; 3]) -> Option<f64> {
+    let det = h[0][0] * (h[1][1] * h[2][2] - h[1][2] * h[2][1])
+        - h[0][1] * (h[1][0] * h[2][2] - h[1][2] * h[2][0])
+        + h[0][2] * (h[1][0] * h[2][1] - h[1][1] * h[2][0]);
+    let minor = h[0][0] * h[1][1] - h[0][1] * h[1][0];
+    let var = minor / det;
+    (det > 0.0 && var > 0.0 && var.is_finite()).then(|| var.sqrt())
+}
+
 /// The nearest earlier nodes to node `m` (of `every` scans each) within the search radius, at
 /// least `min_separation` scans older, from distinct places (more than a submap apart).
 fn candidates(nodes: &[Pose2], m: usize, every: usize, params: &LoopParams) -> Vec<usize> {
@@ -345,8 +392,31 @@ fn candidates(nodes: &[Pose2], m: usize, every: usize, params: &LoopParams) -> V
     chosen
 }
 
-/// Scan `i` matched against the submap of the scans around `j` (at their estimates): its
-/// pose and score, when the score reaches `min_quality`.
+/// The scan-frame `points` of a scan at `pose`, in the world frame.
+fn in_world(pose: Pose2, points: &[[f64; 2]]) -> impl Iterator<Item = [f64; 2]> {
+    let (s, c) = pose.theta_rad.sin_cos();
+    let (x, y) = (pose.x_m, pose.y_m);
+    points
+        .iter()
+        .map(move |p| [x + c * p[0] - s * p[1], y + s * p[0] + c * p[1]])
+}
+
+/// What a submap match gave.
+enum Match {
+    /// The scan's pose, the search's score and the ICP refinement, when it was kept.
+    Found {
+        pose: Pose2,
+        quality: f64,
+        refinement: Option<localiser::ScanMatch>,
+    },
+    /// The ICP refinement failed, or fits the field worse than the search's pose.
+    Unconfirmed,
+    /// The candidate's own scan does not fit its neighbours at its estimate.
+    Misplaced,
+}
+
+/// Scan `i` matched against the submap of the scans around `j` (at their estimates), when
+/// the search's score reaches `min_quality`.
 fn match_submap(
     geometry: &ScanGeometry,
     scans: &[&Scan],
@@ -354,7 +424,7 @@ fn match_submap(
     estimate: &dyn Fn(usize) -> Pose2,
     (j, i): (usize, usize),
     (front, match_params, params): (&FrontEndParams, &MatchParams, &LoopParams),
-) -> Option<(Pose2, f64)> {
+) -> Option<Match> {
     if points[i].len() < front.min_points {
         return None;
     }
@@ -364,13 +434,7 @@ fn match_submap(
     let mut target = MatchTarget::new();
     for k in lo..=hi {
         let pose = estimate(k);
-        let (s, c) = pose.theta_rad.sin_cos();
-        world.extend(points[k].iter().map(|p| {
-            [
-                pose.x_m + c * p[0] - s * p[1],
-                pose.y_m + s * p[0] + c * p[1],
-            ]
-        }));
+        world.extend(in_world(pose, &points[k]));
         target.add_scan(&pose, geometry, scans[k], match_params);
     }
     let window_cells = (params.linear_window_m / front.resolution_m).ceil() as usize + 1;
@@ -388,23 +452,59 @@ fn match_submap(
         rotation_cost: 0.0,
     };
     let found = search(&grid, &points[i], &estimate(i), &window, params.min_quality)?;
-    let refined = target
-        .align(geometry, scans[i], found.pose, match_params)
-        .filter(|m| {
-            m.pose.position().distance_m(&found.pose.position()) <= front.max_refine_shift_m
-        })
-        .map(|m| m.pose);
-    let pose = match refined {
-        Some(p)
-            if crate::correlative::quality(&grid, &points[i], &p)
+    let aligned = target.align(geometry, scans[i], found.pose, match_params);
+    let (pose, refinement) = match aligned {
+        // The refinement ran away from the search's pose: that pose stands.
+        Some(m)
+            if m.pose.position().distance_m(&found.pose.position()) > front.max_refine_shift_m =>
+        {
+            (found.pose, None)
+        }
+        Some(m)
+            if crate::correlative::quality(&grid, &points[i], &m.pose)
                 >= found.quality - front.max_refine_loss =>
         {
-            p
+            (m.pose, Some(m))
         }
-        _ => found.pose,
+        // The refinement failed, or fits the field worse: the data do not confirm the match.
+        _ if params.require_refinement => {
+            tracing::debug!(j, i, quality = found.quality, "loop closure refused");
+            return Some(Match::Unconfirmed);
+        }
+        _ => (found.pose, None),
     };
+    if params.check_candidate {
+        // A closure is measured from the candidate's estimate, so a candidate the front end
+        // misplaced carries its error into it: its scan must fit its neighbours in the
+        // submap, at its estimate, as well as a match must.
+        let others: Vec<[f64; 2]> = (lo..=hi)
+            .filter(|&k| k != j)
+            .flat_map(|k| in_world(estimate(k), &points[k]))
+            .collect();
+        let neighbours = ScoreGrid::new(
+            &others,
+            front.resolution_m,
+            front.smoothing_m,
+            front.depth,
+            1,
+        )?;
+        let fit = crate::correlative::quality(&neighbours, &points[j], &estimate(j));
+        if fit < params.min_quality {
+            tracing::debug!(
+                j,
+                i,
+                fit,
+                "loop closure refused: the candidate is misplaced"
+            );
+            return Some(Match::Misplaced);
+        }
+    }
     tracing::debug!(j, i, quality = found.quality, "loop closure");
-    Some((pose, found.quality))
+    Some(Match::Found {
+        pose,
+        quality: found.quality,
+        refinement,
+    })
 }
 
 #[cfg(test)]
@@ -423,5 +523,217 @@ mod tests {
         let s = closure_heading_sigma(&far, &params);
         assert!((s - 0.7f64.to_radians()).abs() < 1e-12, "{s}");
         assert!((closure_heading_sigma(&[], &params) - 0.7f64.to_radians()).abs() < 1e-12);
+    }
+
+    /// A corridor 10 m long with doors every 2 m on both walls looks the same from x = 3 m
+    /// and x = 5 m: a scan matched there gives a closure that is right in heading and 2 m
+    /// wrong along the corridor. Against the true closures of the way back, the Cauchy loss
+    /// weighs it below `reject_weight`, so it is counted as rejected and leaves the poses.
+    #[test]
+    fn a_misleading_closure_in_a_symmetric_corridor_is_rejected() {
+        use crate::graph::{Edge, OptimiseParams, PoseGraph};
+        use std::f64::consts::PI;
+        let params = LoopParams::default();
+        // Out along x at 1 m steps (nodes 0..=10, heading 0), a half turn in place (node 11
+        // at x = 10, heading pi), back (nodes 12..=21 at x = 9..=0).
+        let mut truth: Vec<Pose2> = (0..=10).map(|k| Pose2::new(k as f64, 0.0, 0.0)).collect();
+        truth.extend((0..=10).map(|k| Pose2::new(10.0 - k as f64, 0.0, PI)));
+        let at = |x: f64, back: bool| {
+            truth
+                .iter()
+                .position(|p| (p.x_m - x).abs() < 1e-9 && (p.theta_rad.abs() > 1.0) == back)
+                .unwrap()
+        };
+        let mut g = PoseGraph::new(truth.clone());
+        // Front-end steps, exact, with close_loops' standard deviations for a 1 m step of
+        // `every` = 3 scans: 0.005 sqrt(3) + 0.015 = 0.0237 m and 0.1 sqrt(3) + 0.6 = 0.77 deg
+        // (the half turn adds 2 % of pi: 4.4 deg).
+        for k in 0..truth.len() - 1 {
+            let step = truth[k].inverse().compose(&truth[k + 1]);
+            let turn = 0.773f64.to_radians() + 0.02 * step.theta_rad.abs();
+            g.add_edge(Edge {
+                from: k,
+                to: k + 1,
+                measured: step,
+                sigma: [0.0237, 0.0237, turn],
+                robust: false,
+            })
+            .unwrap();
+        }
+        // True closures: each node of the way back seen from the outbound node at the same
+        // place, turned by pi; standard deviations of a closure: 0.09 m and 1.2 deg.
+        let closure = |from: usize, to: usize, measured: Pose2| Edge {
+            from,
+            to,
+            measured,
+            sigma: [0.09, 0.09, 1.2f64.to_radians()],
+            robust: true,
+        };
+        for x in 0..=8 {
+            let x = x as f64;
+            g.add_edge(closure(at(x, false), at(x, true), Pose2::new(0.0, 0.0, PI)))
+                .unwrap();
+        }
+        // The misleading one: the way back at x = 3 matched to the outbound scan at x = 5,
+        // which looks the same. The truth is (-2, 0, pi) in node 5's frame: 2 m off, 22
+        // standard deviations, so its weight is about 1 / (1 + 22.2^2) = 0.002.
+        let wrong = closure(at(5.0, false), at(3.0, true), Pose2::new(0.0, 0.0, PI));
+        g.add_edge(wrong).unwrap();
+        let mut plain = g.clone();
+        for e in &mut plain.edges {
+            e.robust = false;
+        }
+        let optimise = OptimiseParams {
+            cauchy_scale: params.cauchy_scale,
+            ..OptimiseParams::default()
+        };
+        g.optimise(&optimise).unwrap();
+        plain.optimise(&optimise).unwrap();
+        let worst = |g: &PoseGraph| {
+            g.nodes
+                .iter()
+                .zip(&truth)
+                .map(|(a, b)| a.position().distance_m(&b.position()))
+                .fold(0.0, f64::max)
+        };
+        // Without the loss the false closure pulls the way back by decimetres; with it, by
+        // millimetres.
+        assert!(worst(&plain) > 0.1, "{}", worst(&plain));
+        assert!(worst(&g) < 0.005, "{}", worst(&g));
+        let weights: Vec<f64> = g
+            .edges
+            .iter()
+            .filter(|e| e.robust)
+            .map(|e| g.weight(e, &optimise))
+            .collect();
+        let (false_weight, true_weights) = weights.split_last().unwrap();
+        assert!((false_weight - 1.0 / (1.0 + (2.0f64 / 0.09).powi(2))).abs() < 5e-4);
+        assert!(*false_weight < params.reject_weight, "{false_weight}");
+        assert!(
+            true_weights.iter().all(|w| *w >= params.reject_weight),
+            "{true_weights:?}"
+        );
+    }
+
+    /// The pose of `b` in the frame of `a`.
+    fn between(a: &Pose2, b: &Pose2) -> Pose2 {
+        a.inverse().compose(b)
+    }
+
+    /// Ranges of `geometry`'s rays from `pose` to the nearest of `walls` (segments).
+    fn ray_cast(geometry: &ScanGeometry, pose: &Pose2, walls: &[[f64; 4]]) -> Vec<f64> {
+        (0..geometry.ray_count)
+            .map(|k| {
+                let a = pose.theta_rad + geometry.bearing_rad(k);
+                let (dy, dx) = a.sin_cos();
+                let mut best = f64::INFINITY;
+                for w in walls {
+                    // pose + t (dx, dy) = w0 + u (w1 - w0), t > 0, 0 <= u <= 1.
+                    let (ex, ey) = (w[2] - w[0], w[3] - w[1]);
+                    let det = ex * dy - dx * ey;
+                    if det.abs() < 1e-12 {
+                        continue;
+                    }
+                    let (qx, qy) = (w[0] - pose.x_m, w[1] - pose.y_m);
+                    let t = (ex * qy - ey * qx) / det;
+                    let u = (dx * qy - dy * qx) / det;
+                    if t > 0.0 && (0.0..=1.0).contains(&u) {
+                        best = best.min(t);
+                    }
+                }
+                best
+            })
+            .collect()
+    }
+
+    /// Two laps around a block in a room with a pillar, scans ray-cast at the true poses; the
+    /// front end's trajectory is the truth but for one scan, turned by 80 deg (as a front end
+    /// misplaces a scan in a fast turn). Closures from that scan would be measured from its
+    /// wrong estimate, 80 deg off: the candidate check refuses them, and every closure left
+    /// agrees with the truth.
+    #[test]
+    fn a_closure_from_a_misplaced_candidate_is_refused() {
+        // Room 12 m x 8 m, a 4 m x 2 m block in the middle, a 0.5 m pillar near a corner.
+        let mut walls = vec![
+            [0.0, 0.0, 12.0, 0.0],
+            [12.0, 0.0, 12.0, 8.0],
+            [12.0, 8.0, 0.0, 8.0],
+            [0.0, 8.0, 0.0, 0.0],
+        ];
+        for (x0, y0, x1, y1) in [(4.0, 3.0, 8.0, 5.0), (10.0, 6.0, 10.5, 6.5)] {
+            walls.extend([
+                [x0, y0, x1, y0],
+                [x1, y0, x1, y1],
+                [x1, y1, x0, y1],
+                [x0, y1, x0, y0],
+            ]);
+        }
+        // Around the block at 1.5 m: 0.25 m steps along the sides, 15 deg turns at corners.
+        let corners: [(f64, f64); 4] = [(2.5, 1.5), (9.5, 1.5), (9.5, 6.5), (2.5, 6.5)];
+        let mut lap = Vec::new();
+        for c in 0..4 {
+            let (x0, y0) = corners[c];
+            let (x1, y1) = corners[(c + 1) % 4];
+            let heading = (y1 - y0).atan2(x1 - x0);
+            let steps = ((x1 - x0).hypot(y1 - y0) / 0.25).round() as usize;
+            for k in 0..steps {
+                let f = k as f64 / steps as f64;
+                lap.push(Pose2::new(x0 + f * (x1 - x0), y0 + f * (y1 - y0), heading));
+            }
+            for k in 1..6 {
+                lap.push(Pose2::new(x1, y1, heading + k as f64 * 15f64.to_radians()));
+            }
+        }
+        let truth: Vec<Pose2> = lap.iter().chain(lap.iter()).copied().collect();
+        let geometry = ScanGeometry::centred(541, 270f64.to_radians(), 0.1, 20.0).unwrap();
+        let scans: Vec<Scan> = truth
+            .iter()
+            .map(|p| Scan::from_ranges(&geometry, &ray_cast(&geometry, p, &walls), 0.0))
+            .collect();
+        let refs: Vec<&Scan> = scans.iter().collect();
+        // Scan 12 (a node: every third scan) on the first side, turned by 80 deg.
+        let bad = 12;
+        let mut poses = truth.clone();
+        poses[bad] = Pose2::new(
+            poses[bad].x_m,
+            poses[bad].y_m,
+            poses[bad].theta_rad + 80f64.to_radians(),
+        );
+        let front = FrontEndParams::default();
+        let run = |check_candidate: bool| {
+            let params = LoopParams {
+                check_candidate,
+                ..LoopParams::default()
+            };
+            close_loops(&geometry, &refs, &poses, &front, &params)
+                .unwrap()
+                .1
+        };
+        let error = |c: &Closure| {
+            let got = Pose2::new(c.measured[0], c.measured[1], c.measured[2]);
+            let e = between(&between(&truth[c.from], &truth[c.to]), &got);
+            (e.x_m.hypot(e.y_m), e.theta_rad.abs().to_degrees())
+        };
+        let without = run(false);
+        let from_bad: Vec<(f64, f64)> = without
+            .closures
+            .iter()
+            .filter(|c| c.from == bad)
+            .map(error)
+            .collect();
+        assert!(!from_bad.is_empty(), "{without:?}");
+        // Measured from the turned estimate: 80 deg off.
+        assert!(
+            from_bad.iter().all(|(_, deg)| (deg - 80.0).abs() < 2.0),
+            "{from_bad:?}"
+        );
+        let with = run(true);
+        assert_eq!(with.misplaced_candidates, from_bad.len(), "{with:?}");
+        assert!(with.closures.iter().all(|c| c.from != bad));
+        assert!(with.accepted > 0);
+        for c in with.closures.iter().filter(|c| c.accepted) {
+            let (m, deg) = error(c);
+            assert!(m <= 0.05 && deg <= 1.0, "{c:?}: {m} m {deg} deg");
+        }
     }
 }

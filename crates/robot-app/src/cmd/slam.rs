@@ -233,7 +233,12 @@ pub fn run(args: SlamArgs) -> anyhow::Result<()> {
             e.relative_1.rotation_deg.mean,
             e.absolute_m.rmse,
             e.final_position_error_m
-        )
+        ) + &e.closures.map_or(String::new(), |c| {
+            format!(
+                ", {} of {} accepted closures more than {} m or {} deg off",
+                c.outside, c.accepted, c.bound_m, c.bound_deg
+            )
+        })
     });
     #[allow(clippy::print_stdout)]
     {
