@@ -8,6 +8,9 @@ use std::process::Command;
 
 use serde_json::Value;
 
+#[path = "common/tum.rs"]
+mod tum;
+
 const BIN: &str = env!("CARGO_BIN_EXE_robot-app");
 
 fn json(path: &Path) -> Value {
@@ -76,21 +79,10 @@ fn a_recorded_exploration_of_mbicp_replays_within_five_centimetres_of_the_truth(
     assert!(ate <= 0.05, "ATE {ate} m");
     // The reference is the simulator's truth (the explore run's truth.tum ends at the same
     // pose), not the navigator's estimate (estimate.tum, a few centimetres off).
-    let last_xy = |path: &Path| -> [f64; 2] {
-        let text = std::fs::read_to_string(path).unwrap();
-        let f: Vec<f64> = text
-            .lines()
-            .last()
-            .unwrap()
-            .split_whitespace()
-            .map(|v| v.parse().unwrap())
-            .collect();
-        [f[1], f[2]]
-    };
     let dist = |a: [f64; 2], b: [f64; 2]| (a[0] - b[0]).hypot(a[1] - b[1]);
-    let reference = last_xy(&slam.join("reference.tum"));
-    assert!(dist(reference, last_xy(&out.join("truth.tum"))) < 1e-6);
-    assert!(dist(reference, last_xy(&out.join("estimate.tum"))) > 1e-3);
+    let reference = tum::last_xy(&slam.join("reference.tum"));
+    assert!(dist(reference, tum::last_xy(&out.join("truth.tum"))) < 1e-6);
+    assert!(dist(reference, tum::last_xy(&out.join("estimate.tum"))) > 1e-3);
 }
 
 #[test]

@@ -308,7 +308,7 @@ mod tests {
         assert_eq!((c.accepted, c.outside, c.outside_heading_only), (4, 2, 1));
         assert!((c.worst_m - 0.3).abs() < 1e-9, "{c:?}");
         assert!((c.worst_deg - 2.5).abs() < 1e-9, "{c:?}");
-        // Seen from scan 1, scan 0 is 2 m behind and turned -90 deg: (0, 2, -90 deg) in
+        // Seen from scan 1, scan 0 is 2 m to its left and turned -90 deg: (0, 2, -90 deg) in
         // scan 1's frame (x ahead is +y of the world).
         let back = [(1, 0, Pose2::new(0.0, 2.0, -turn))];
         assert_eq!(

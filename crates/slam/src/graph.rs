@@ -273,6 +273,17 @@ fn jacobians(xi: &Pose2, xj: &Pose2, z: &Pose2) -> ([[f64; 3]; 3], [[f64; 3]; 3]
     (a, b)
 }
 
+/// The largest position error of `graph`'s nodes against `truth`, metres (for tests).
+#[cfg(test)]
+pub(crate) fn worst_position_error(graph: &PoseGraph, truth: &[Pose2]) -> f64 {
+    graph
+        .nodes
+        .iter()
+        .zip(truth)
+        .map(|(a, b)| a.position().distance_m(&b.position()))
+        .fold(0.0, f64::max)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -392,13 +403,7 @@ mod tests {
         let params = OptimiseParams::default();
         g.optimise(&params).unwrap();
         plain.optimise(&params).unwrap();
-        let worst = |g: &PoseGraph| {
-            g.nodes
-                .iter()
-                .zip(&truth)
-                .map(|(a, b)| a.position().distance_m(&b.position()))
-                .fold(0.0, f64::max)
-        };
+        let worst = |g: &PoseGraph| worst_position_error(g, &truth);
         // Without the loss the false edge pulls the poses by decimetres. With it, an edge 30
         // sigma off (1.5 m / 0.05 m) keeps weight 1 / (1 + 30^2) = 0.0011 and pulls by
         // millimetres.

@@ -186,7 +186,7 @@ pub struct Closure {
     /// Standard deviation of its heading in the graph, degrees.
     pub heading_sigma_deg: f64,
     /// Heading standard deviation from the ICP refinement's data alone, degrees (`None`: the
-    /// refinement was not kept).
+    /// refinement was not kept, or its data leave the heading free).
     pub data_heading_sigma_deg: Option<f64>,
     /// Worst position standard deviation from the ICP refinement's data alone, metres.
     pub data_worst_sigma_m: Option<f64>,
@@ -309,7 +309,7 @@ pub fn close_loops(
                 data_heading_sigma_deg: refinement
                     .and_then(|m| heading_sigma_of(&m.data_information))
                     .map(f64::to_degrees),
-                data_worst_sigma_m: refinement.map(|m| m.worst_direction().1),
+                data_worst_sigma_m: refinement.map(|m| m.data_worst_sigma_m),
                 residual_sigmas: [0.0; 3],
                 weight: 1.0,
             });
@@ -321,8 +321,8 @@ pub fn close_loops(
     }
     graph.optimise(&optimise)?;
     report.optimisations += 1;
-    let robust: Vec<Edge> = graph.edges.iter().filter(|e| e.robust).copied().collect();
-    for (c, e) in report.closures.iter_mut().zip(&robust) {
+    let robust = graph.edges.iter().filter(|e| e.robust);
+    for (c, e) in report.closures.iter_mut().zip(robust) {
         c.weight = graph.weight(e, &optimise);
         c.residual_sigmas = graph.residual(e);
         c.accepted = c.weight >= params.reject_weight;
@@ -481,14 +481,11 @@ fn match_submap(
             .filter(|&k| k != j)
             .flat_map(|k| in_world(estimate(k), &points[k]))
             .collect();
-        let neighbours = ScoreGrid::new(
-            &others,
-            front.resolution_m,
-            front.smoothing_m,
-            front.depth,
-            1,
-        )?;
-        let fit = crate::correlative::quality(&neighbours, &points[j], &estimate(j));
+        // Without neighbours (a submap of one scan) there is nothing to check against.
+        let neighbours = ScoreGrid::new(&others, front.resolution_m, front.smoothing_m, 0, 1);
+        let fit = neighbours.map_or(1.0, |g| {
+            crate::correlative::quality(&g, &points[j], &estimate(j))
+        });
         if fit < params.min_quality {
             tracing::debug!(
                 j,
@@ -523,6 +520,22 @@ mod tests {
         let s = closure_heading_sigma(&far, &params);
         assert!((s - 0.7f64.to_radians()).abs() < 1e-12, "{s}");
         assert!((closure_heading_sigma(&[], &params) - 0.7f64.to_radians()).abs() < 1e-12);
+    }
+
+    #[test]
+    fn heading_sigma_of_an_information_matrix_by_hand() {
+        // Independent axes: the heading's variance is 1 / 100, its sigma 0.1 rad.
+        let diag = [[4.0, 0.0, 0.0], [0.0, 4.0, 0.0], [0.0, 0.0, 100.0]];
+        assert!((heading_sigma_of(&diag).unwrap() - 0.1).abs() < 1e-12);
+        // x and heading coupled: [[2, 0, 1], [0, 1, 0], [1, 0, 1]] has determinant 1 and the
+        // heading's cofactor 2 * 1 - 0 = 2, so the variance is 2 and the sigma sqrt 2.
+        let coupled = [[2.0, 0.0, 1.0], [0.0, 1.0, 0.0], [1.0, 0.0, 1.0]];
+        assert!((heading_sigma_of(&coupled).unwrap() - 2f64.sqrt()).abs() < 1e-12);
+        // Singular: no sigma.
+        assert_eq!(
+            heading_sigma_of(&[[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0; 3]]),
+            None
+        );
     }
 
     /// A corridor 10 m long with doors every 2 m on both walls looks the same from x = 3 m
@@ -589,13 +602,7 @@ mod tests {
         };
         g.optimise(&optimise).unwrap();
         plain.optimise(&optimise).unwrap();
-        let worst = |g: &PoseGraph| {
-            g.nodes
-                .iter()
-                .zip(&truth)
-                .map(|(a, b)| a.position().distance_m(&b.position()))
-                .fold(0.0, f64::max)
-        };
+        let worst = |g: &PoseGraph| crate::graph::worst_position_error(g, &truth);
         // Without the loss the false closure pulls the way back by decimetres; with it, by
         // millimetres.
         assert!(worst(&plain) > 0.1, "{}", worst(&plain));

@@ -198,8 +198,9 @@ pub fn run(args: ExploreArgs) -> anyhow::Result<()> {
             args.options.out.display()
         );
     }
+    // What was recorded is mapped even when the recording broke off.
+    let mapped = args.options.write_slam_map();
     explored.recorded?;
-    args.options.write_slam_map(&config)?;
     if summary.reason == Reason::Interrupted {
         return Err(crate::interrupt::Interrupted.into());
     }
@@ -210,7 +211,7 @@ pub fn run(args: ExploreArgs) -> anyhow::Result<()> {
             summary.note
         );
     }
-    Ok(())
+    mapped
 }
 
 /// What the simulator knows beside an exploration: collisions, distance driven, true pose.

@@ -21,7 +21,7 @@ use clap::Args;
 
 use crate::config::{Method, Params};
 
-/// Options shared by the commands that run the goal-seeking loop (`sim`, `run`).
+/// Options shared by the commands that run the goal-seeking loop (`sim`, `run`, `explore`).
 #[derive(Debug, Clone, Args)]
 pub struct LoopOptions {
     /// TOML file overriding tuning parameters (see docs/robot-app.md).
@@ -61,7 +61,16 @@ impl LoopOptions {
 
     /// Loads the configuration (`--config` over the `--method` preset).
     pub fn load(&self) -> anyhow::Result<Params> {
-        crate::config::load(self.config.as_deref(), self.method)
+        let config = crate::config::load(self.config.as_deref(), self.method)?;
+        let chunk = config.navigator.rotation_chunk_deg;
+        if self.slam_map && chunk > SLAM_MAP_MAX_CHUNK_DEG {
+            tracing::warn!(
+                "--slam-map: the robot turns up to {chunk} deg between two scans \
+                 ([navigator] rotation_chunk_deg); a scan matcher can mistake such a turn in a \
+                 square room, set it to 20 for a reliable map"
+            );
+        }
+        Ok(config)
     }
 
     /// The file to record to: `--record`'s, or `OUT/run.mcap` with `--slam-map`.
@@ -72,33 +81,58 @@ impl LoopOptions {
     }
 
     /// With `--slam-map`: maps the run's recording as `robot-app slam` does (default
-    /// parameters, 0.05 m cells, rays up to 20 m) into `OUT/slam/`.
-    pub fn write_slam_map(&self, config: &Params) -> anyhow::Result<()> {
+    /// parameters and map settings) into `OUT/slam/`. A recording without a scan is reported
+    /// and skipped; an error is logged as well as returned, so that a caller that ends on the
+    /// run's own outcome first still shows it.
+    pub fn write_slam_map(&self) -> anyhow::Result<()> {
         let (true, Some(path)) = (self.slam_map, self.record_path()) else {
             return Ok(());
         };
-        let chunk = config.navigator.rotation_chunk_deg;
-        if chunk > SLAM_MAP_MAX_CHUNK_DEG {
-            tracing::warn!(
-                "--slam-map: the robot turns up to {chunk} deg between two scans \
-                 ([navigator] rotation_chunk_deg); a scan matcher can mistake such a turn in a \
-                 square room, set it to 20 for a reliable map"
-            );
+        let map = || -> anyhow::Result<Option<(usize, usize)>> {
+            let (front, loops) = slam::load_params(None)?;
+            let mut run = match slam::run_log(&path, &front, Some(&loops)) {
+                Ok(run) => run,
+                Err(e)
+                    if e.chain().any(|c| {
+                        matches!(
+                            c.downcast_ref::<scan_log::LogError>(),
+                            Some(scan_log::LogError::NoScans { .. })
+                        )
+                    }) =>
+                {
+                    return Ok(None);
+                }
+                Err(e) => return Err(e.context(format!("mapping {}", path.display()))),
+            };
+            let dir = self.out.join("slam");
+            slam::write_outputs(
+                &dir,
+                &mut run,
+                slam::MAP_RESOLUTION_M,
+                slam::MAP_MAX_RANGE_M,
+            )
+            .with_context(|| format!("writing {}", dir.display()))?;
+            Ok(Some((run.report.placed, run.report.scans)))
+        };
+        match map() {
+            Ok(Some((placed, scans))) => {
+                tracing::info!(
+                    placed,
+                    scans,
+                    "--slam-map: map and trajectory in {}",
+                    self.out.join("slam").display()
+                );
+                Ok(())
+            }
+            Ok(None) => {
+                tracing::warn!("--slam-map: {} holds no scan to map", path.display());
+                Ok(())
+            }
+            Err(e) => {
+                tracing::error!("--slam-map: {e:#}");
+                Err(e.context("--slam-map"))
+            }
         }
-        let (front, loops) = slam::load_params(None)?;
-        let mut run = slam::run_log(&path, &front, Some(&loops))
-            .with_context(|| format!("--slam-map: mapping {}", path.display()))?;
-        let dir = self.out.join("slam");
-        slam::write_outputs(&dir, &mut run, 0.05, 20.0)
-            .with_context(|| format!("--slam-map: writing {}", dir.display()))?;
-        let r = &run.report;
-        tracing::info!(
-            placed = r.placed,
-            scans = r.scans,
-            "--slam-map: map and trajectory in {}",
-            dir.display()
-        );
-        Ok(())
     }
 
     /// Creates the output folder and writes `config` into it as `config.toml`.

@@ -129,10 +129,11 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
         "run finished; outputs in {}",
         args.options.out.display()
     );
+    // What was recorded is mapped even when the recording broke off.
+    let mapped = args.options.write_slam_map();
     if let Some(e) = record_error {
         bail!("recording failed: {e}");
     }
-    args.options.write_slam_map(&config)?;
     if run.summary.reason == Reason::Interrupted {
         return Err(crate::interrupt::Interrupted.into());
     }
@@ -143,7 +144,7 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
             run.summary.note
         );
     }
-    Ok(())
+    mapped
 }
 
 /// The `summary.json` of a run on a real robot (no truth: no errors, no collisions).

@@ -341,7 +341,7 @@ pub fn run(args: SimArgs) -> anyhow::Result<()> {
             args.options.out.display()
         );
     }
-    args.options.write_slam_map(&spec.config)?;
+    let mapped = args.options.write_slam_map();
     if s.reason == Reason::Interrupted {
         return Err(crate::interrupt::Interrupted.into());
     }
@@ -352,7 +352,7 @@ pub fn run(args: SimArgs) -> anyhow::Result<()> {
             s.note
         );
     }
-    Ok(())
+    mapped
 }
 
 /// Runs `spec` recording every scan with its true pose and the navigator's estimate to

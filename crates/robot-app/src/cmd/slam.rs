@@ -17,6 +17,12 @@ use slam::{FrontEndParams, LogRun, LoopParams, SlamRun};
 use crate::outputs::write_atomic;
 use scan_log::tum;
 
+/// Cell side of the map `slam` writes by default, metres.
+pub const MAP_RESOLUTION_M: f64 = 0.05;
+
+/// Range up to which rays enter that map by default, metres.
+pub const MAP_MAX_RANGE_M: f64 = 20.0;
+
 /// Arguments of `robot-app slam`.
 #[derive(Debug, Args)]
 pub struct SlamArgs {
@@ -38,10 +44,10 @@ pub struct SlamArgs {
     #[arg(long)]
     pub no_loop_closure: bool,
     /// Map cell side, metres.
-    #[arg(long, default_value_t = 0.05)]
+    #[arg(long, default_value_t = MAP_RESOLUTION_M)]
     pub resolution: f64,
     /// Rays enter the map up to this range, metres.
-    #[arg(long, default_value_t = 20.0)]
+    #[arg(long, default_value_t = MAP_MAX_RANGE_M)]
     pub max_range: f64,
     /// Live view (the front end's poses as scans are placed; the final map at the end).
     #[command(flatten)]
