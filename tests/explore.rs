@@ -108,6 +108,9 @@ fn the_paper_world_is_explored_without_a_goal() {
     );
     assert!(s["coverage_share"].as_f64().unwrap() >= 0.95, "{s}");
     assert!(s["map_accuracy_share"].as_f64().unwrap() >= 0.98, "{s}");
+    // No --slam-map: no SLAM map to score.
+    assert!(s["slam_map_coverage_share"].is_null(), "{s}");
+    assert!(s["slam_map_accuracy_share"].is_null(), "{s}");
     // Every frontier tried is listed with how it ended, and the legs add up.
     let goals = s["goals"].as_array().unwrap();
     assert_eq!(goals.len() as u64, s["goals_tried"].as_u64().unwrap());
@@ -121,6 +124,38 @@ fn the_paper_world_is_explored_without_a_goal() {
         "run.png",
         "config.toml",
     ] {
+        assert!(out.join(f).is_file(), "{f}");
+    }
+}
+
+/// With `--slam-map` the SLAM map of the recording, placed at the true start, is scored as the
+/// navigator's own map is, against the bars (95 % coverage, 98 % accuracy).
+#[test]
+fn the_slam_map_of_an_exploration_is_scored_against_the_true_world() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let argv: [&OsStr; 6] = [
+        "explore".as_ref(),
+        "--seed".as_ref(),
+        "0".as_ref(),
+        "--slam-map".as_ref(),
+        "--out".as_ref(),
+        out.as_os_str(),
+    ];
+    let args = ExploreCli::try_parse_from(argv).unwrap().args;
+    robot_app::cmd::explore::run(args).expect("the exploration and its SLAM map succeed");
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("explore.json")).unwrap()).unwrap();
+    println!("{s}");
+    assert!(
+        s["slam_map_coverage_share"].as_f64().unwrap() >= 0.95,
+        "{s}"
+    );
+    assert!(
+        s["slam_map_accuracy_share"].as_f64().unwrap() >= 0.98,
+        "{s}"
+    );
+    for f in ["run.mcap", "slam/map.pgm", "slam/slam.json"] {
         assert!(out.join(f).is_file(), "{f}");
     }
 }

@@ -304,8 +304,8 @@ impl FrontEnd {
 
     /// Places the next scan (of `geometry`) with the search centred on `prediction` (a pose
     /// from a motion model, e.g. the commands a robot gave since its last scan) instead of
-    /// the constant-velocity model. The first scan is placed at `prediction` itself, so that
-    /// the poses are in the caller's frame.
+    /// the constant-velocity model: the narrow window first, then the wide one. The first
+    /// scan is placed at `prediction` itself, so that the poses are in the caller's frame.
     pub fn add_scan_near(
         &mut self,
         geometry: &ScanGeometry,
@@ -401,18 +401,19 @@ impl FrontEnd {
         // window's edge.
         let slow = step.x_m.hypot(step.y_m) <= 0.5 * p.narrow_window_m
             && step.theta_rad.abs() <= 0.5 * p.narrow_window_deg.to_radians();
-        // Only for the constant-velocity model: a caller's prediction keeps its own window.
-        let narrow =
-            (prediction.is_none() && p.narrow_window_m > 0.0 && p.narrow_window_deg > 0.0 && slow)
-                .then(|| {
-                    let w = window(
-                        p.narrow_window_m.min(p.linear_window_m),
-                        p.narrow_window_deg.min(p.angular_window_deg),
-                    );
-                    search(grid, &points, &guess, &w, p.min_quality)
-                })
-                .flatten()
-                .filter(|f| !f.on_edge);
+        // For the constant-velocity model when the last step was slow, and for every motion
+        // prediction of `add_scan_near`; `locate_near` keeps its caller's window alone.
+        let narrow_first = if prediction.is_none() { slow } else { commit };
+        let narrow = (narrow_first && p.narrow_window_m > 0.0 && p.narrow_window_deg > 0.0)
+            .then(|| {
+                let w = window(
+                    p.narrow_window_m.min(p.linear_window_m),
+                    p.narrow_window_deg.min(p.angular_window_deg),
+                );
+                search(grid, &points, &guess, &w, p.min_quality)
+            })
+            .flatten()
+            .filter(|f| !f.on_edge);
         let wide = narrow.is_none();
         let found = match narrow {
             Some(f) => f,

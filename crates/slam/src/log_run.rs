@@ -105,6 +105,8 @@ pub struct LogRun {
     times_ms: Vec<f64>,
     scans: usize,
     started: Instant,
+    /// The motion source's pose of the last placed scan ([`LogRun::add_with_motion`]).
+    last_motion: Option<Pose2>,
 }
 
 impl LogRun {
@@ -123,6 +125,7 @@ impl LogRun {
             times_ms: Vec::new(),
             scans: 0,
             started: Instant::now(),
+            last_motion: None,
         })
     }
 
@@ -135,17 +138,43 @@ impl LogRun {
         scan: &Scan,
         reference: Option<Pose2>,
     ) {
+        self.add_with_motion(line, geometry, scan, reference, None);
+    }
+
+    /// [`LogRun::add`] with the search centred on the last placed pose moved as `motion` (a
+    /// pose of the scan from another source: odometry, a robot's own estimate) moved since
+    /// the last placed scan; without `motion`, or before one, the constant-velocity model.
+    pub fn add_with_motion(
+        &mut self,
+        line: usize,
+        geometry: &ScanGeometry,
+        scan: &Scan,
+        reference: Option<Pose2>,
+        motion: Option<Pose2>,
+    ) {
         self.scans += 1;
         let t = Instant::now();
-        let placement = self.fe.add_scan(geometry, scan);
+        let prediction = match (motion, self.last_motion, self.placed.last()) {
+            (Some(now), Some(then), Some(last)) => {
+                Some(last.pose.compose(&then.inverse().compose(&now)))
+            }
+            _ => None,
+        };
+        let placement = match prediction {
+            Some(p) => self.fe.add_scan_near(geometry, scan, p),
+            None => self.fe.add_scan(geometry, scan),
+        };
         self.times_ms.push(t.elapsed().as_secs_f64() * 1e3);
         match placement {
-            Placement::Placed { pose, .. } => self.placed.push(Placed {
-                time_s: scan.host_time_s,
-                pose,
-                reference,
-                scan: scan.clone(),
-            }),
+            Placement::Placed { pose, .. } => {
+                self.last_motion = motion;
+                self.placed.push(Placed {
+                    time_s: scan.host_time_s,
+                    pose,
+                    reference,
+                    scan: scan.clone(),
+                })
+            }
             Placement::Skipped { reason } => {
                 tracing::warn!("{} line {line}: scan not placed: {reason}", self.name);
                 self.skipped.push(Skip {
@@ -302,4 +331,39 @@ fn evaluate(placed: &[Placed], loops: Option<&LoopReport>) -> Option<Evaluation>
             closure_check(&accepted, &reference, 0.2, 2.0)
         }),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use scan_types::testkit::{boxed, scan_at};
+
+    /// The second heading placed after a scan at the centre of a 4 m square room and a second
+    /// scan there after a 90 deg turn, with `motion` poses for the two scans.
+    fn heading_after_a_quarter_turn(motion: [Option<Pose2>; 2]) -> f64 {
+        let g = ScanGeometry::new(-120f64.to_radians(), 1f64.to_radians(), 241, 0.02, 5.6).unwrap();
+        let room = boxed(-2.0, -2.0, 2.0, 2.0);
+        let mut run = LogRun::new("room", g, &FrontEndParams::default()).unwrap();
+        for (k, theta) in [0.0, std::f64::consts::FRAC_PI_2].into_iter().enumerate() {
+            let scan = scan_at(&g, &room, 0.0, 0.0, theta);
+            run.add_with_motion(k + 1, &g, &scan, None, motion[k]);
+        }
+        assert_eq!(run.placed().len(), 2);
+        run.placed()[1].pose.theta_rad.to_degrees()
+    }
+
+    #[test]
+    fn a_motion_source_resolves_a_turn_the_laser_cannot_see() {
+        // The room looks the same after a quarter turn: from the laser alone (constant
+        // velocity: no turn) the scan stays at 0 deg.
+        let alone = heading_after_a_quarter_turn([None, None]);
+        assert!(alone.abs() < 1.0, "{alone}");
+        // A motion source that turned 90 deg between the scans, in a frame of its own.
+        let (a, b) = (
+            Pose2::new(10.0, 5.0, 0.5),
+            Pose2::new(10.0, 5.0, 0.5 + std::f64::consts::FRAC_PI_2),
+        );
+        let turned = heading_after_a_quarter_turn([Some(a), Some(b)]);
+        assert!((turned - 90.0).abs() < 1.0, "{turned}");
+    }
 }

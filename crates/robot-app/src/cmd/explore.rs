@@ -90,6 +90,11 @@ pub struct ExploreSummary {
     pub final_position_error_m: Option<f64>,
     /// RMS of the position error at every leg end, metres (simulator).
     pub ate_rmse_m: Option<f64>,
+    /// With `--slam-map` (simulator): `coverage_share` of the laser-only SLAM map, placed at
+    /// the true start.
+    pub slam_map_coverage_share: Option<f64>,
+    /// With `--slam-map` (simulator): `map_accuracy_share` of the laser-only SLAM map.
+    pub slam_map_accuracy_share: Option<f64>,
     /// CPU time, seconds (the loop's own thread).
     pub cpu_time_s: f64,
     /// Method preset used.
@@ -148,6 +153,8 @@ struct Explored {
     summary: ExploreSummary,
     run: crate::runloop::ExploreRun,
     world: Option<(std::sync::Arc<World>, String)>,
+    /// The robot radius and start that map quality is measured with (simulator).
+    quality_at: Option<(f64, WorldPoint)>,
     /// How `--record` ended (reported once the other outputs are written).
     recorded: anyhow::Result<()>,
 }
@@ -167,6 +174,7 @@ pub fn run(args: ExploreArgs) -> anyhow::Result<()> {
         Some(port) => explore_robot(&args, port, &config, &params)?,
         None => explore_sim(&args, &config, &params)?,
     };
+    let mut explored = explored;
     let summary = &explored.summary;
     let name = explored.world.as_ref().map_or("robot", |(_, n)| n.as_str());
     write_outputs(&args.options.out, &explored.run, summary, name)?;
@@ -200,7 +208,33 @@ pub fn run(args: ExploreArgs) -> anyhow::Result<()> {
     }
     // What was recorded is mapped even when the recording broke off.
     let mapped = args.options.write_slam_map();
+    if let (Ok(Some(slam_run)), Some((world, _)), Some((radius_m, start))) =
+        (&mapped, &explored.world, explored.quality_at)
+        && let Some(grid) = super::slam::map_at_reference_start(
+            &slam_run.geometry,
+            &slam_run.placed,
+            config.localiser.map_resolution_m,
+            super::slam::MAP_MAX_RANGE_M,
+        )
+    {
+        let (coverage, accuracy) = map_quality(world, radius_m, start, &grid);
+        let summary = &mut explored.summary;
+        summary.slam_map_coverage_share = coverage;
+        summary.slam_map_accuracy_share = accuracy;
+        let mut text = serde_json::to_string_pretty(summary)?;
+        text.push('\n');
+        write_atomic(&args.options.out.join("explore.json"), text.as_bytes())?;
+        #[allow(clippy::print_stdout)]
+        {
+            println!(
+                "--slam-map: the SLAM map placed at the true start: coverage {}, map accuracy {}",
+                pct(coverage),
+                pct(accuracy)
+            );
+        }
+    }
     explored.recorded?;
+    let summary = &explored.summary;
     if summary.reason == Reason::Interrupted {
         return Err(crate::interrupt::Interrupted.into());
     }
@@ -211,7 +245,7 @@ pub fn run(args: ExploreArgs) -> anyhow::Result<()> {
             summary.note
         );
     }
-    mapped
+    mapped.map(|_| ())
 }
 
 /// What the simulator knows beside an exploration: collisions, distance driven, true pose.
@@ -269,6 +303,8 @@ fn summary_of(
                 .distance_m(&t.pose.position())
         }),
         ate_rmse_m: run.log.ate_rmse_m(),
+        slam_map_coverage_share: None,
+        slam_map_accuracy_share: None,
         cpu_time_s,
         method: config.method.to_string(),
         seed,
@@ -448,6 +484,7 @@ fn explore_sim(
         summary,
         run,
         world: Some((setup.world.clone(), setup.world_name.clone())),
+        quality_at: Some((setup.robot_radius_m, setup.start.position())),
         recorded,
     })
 }
@@ -510,6 +547,7 @@ fn explore_robot(
         summary,
         run,
         world: None,
+        quality_at: None,
         recorded,
     })
 }

@@ -41,14 +41,12 @@ pub struct LoopOptions {
     /// messages: /scan, poses, /tf and /map, for ros2 bag, rosbags, Foxglove).
     #[arg(long, value_enum, default_value = "foxglove", requires = "record")]
     pub profile: crate::record::RecordProfile,
-    /// After the run, map it with laser-only SLAM (as `robot-app slam`, loop closure on) from
-    /// every scan it read, into OUT/slam/; records to OUT/run.mcap unless --record is given.
+    /// After the run, map it with SLAM (as `robot-app slam --motion-prior`: loop closure on,
+    /// each scan's search centred on the robot's own estimate) from every scan it read, into
+    /// OUT/slam/; records to OUT/run.mcap unless --record is given.
     #[arg(long)]
     pub slam_map: bool,
 }
-
-/// Turns larger than this between two scans are flagged for `--slam-map`, degrees.
-const SLAM_MAP_MAX_CHUNK_DEG: f64 = 30.0;
 
 impl LoopOptions {
     /// Loads the configuration, creates the output folder and writes the configuration used
@@ -61,16 +59,7 @@ impl LoopOptions {
 
     /// Loads the configuration (`--config` over the `--method` preset).
     pub fn load(&self) -> anyhow::Result<Params> {
-        let config = crate::config::load(self.config.as_deref(), self.method)?;
-        let chunk = config.navigator.rotation_chunk_deg;
-        if self.slam_map && chunk > SLAM_MAP_MAX_CHUNK_DEG {
-            tracing::warn!(
-                "--slam-map: the robot turns up to {chunk} deg between two scans \
-                 ([navigator] rotation_chunk_deg); a scan matcher can mistake such a turn in a \
-                 square room, set it to 20 for a reliable map"
-            );
-        }
-        Ok(config)
+        crate::config::load(self.config.as_deref(), self.method)
     }
 
     /// The file to record to: `--record`'s, or `OUT/run.mcap` with `--slam-map`.
@@ -80,17 +69,17 @@ impl LoopOptions {
             .or_else(|| self.slam_map.then(|| self.out.join("run.mcap")))
     }
 
-    /// With `--slam-map`: maps the run's recording as `robot-app slam` does (default
-    /// parameters and map settings) into `OUT/slam/`. A recording without a scan is reported
+    /// With `--slam-map`: maps the run's recording as `robot-app slam --motion-prior` does
+    /// (default parameters and map settings) into `OUT/slam/`. A recording without a scan is reported
     /// and skipped; an error is logged as well as returned, so that a caller that ends on the
-    /// run's own outcome first still shows it.
-    pub fn write_slam_map(&self) -> anyhow::Result<()> {
+    /// run's own outcome first still shows it. The SLAM run, when there was one.
+    pub fn write_slam_map(&self) -> anyhow::Result<Option<::slam::SlamRun>> {
         let (true, Some(path)) = (self.slam_map, self.record_path()) else {
-            return Ok(());
+            return Ok(None);
         };
-        let map = || -> anyhow::Result<Option<(usize, usize)>> {
+        let map = || -> anyhow::Result<Option<::slam::SlamRun>> {
             let (front, loops) = slam::load_params(None)?;
-            let mut run = match slam::run_log(&path, &front, Some(&loops)) {
+            let mut run = match slam::run_log_with_motion(&path, &front, Some(&loops)) {
                 Ok(run) => run,
                 Err(e)
                     if e.chain().any(|c| {
@@ -112,21 +101,21 @@ impl LoopOptions {
                 slam::MAP_MAX_RANGE_M,
             )
             .with_context(|| format!("writing {}", dir.display()))?;
-            Ok(Some((run.report.placed, run.report.scans)))
+            Ok(Some(run))
         };
         match map() {
-            Ok(Some((placed, scans))) => {
+            Ok(Some(run)) => {
                 tracing::info!(
-                    placed,
-                    scans,
+                    placed = run.report.placed,
+                    scans = run.report.scans,
                     "--slam-map: map and trajectory in {}",
                     self.out.join("slam").display()
                 );
-                Ok(())
+                Ok(Some(run))
             }
             Ok(None) => {
                 tracing::warn!("--slam-map: {} holds no scan to map", path.display());
-                Ok(())
+                Ok(None)
             }
             Err(e) => {
                 tracing::error!("--slam-map: {e:#}");

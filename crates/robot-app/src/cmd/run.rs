@@ -130,7 +130,7 @@ pub fn run(args: RunArgs) -> anyhow::Result<()> {
         args.options.out.display()
     );
     // What was recorded is mapped even when the recording broke off.
-    let mapped = args.options.write_slam_map();
+    let mapped = args.options.write_slam_map().map(|_| ());
     if let Some(e) = record_error {
         bail!("recording failed: {e}");
     }

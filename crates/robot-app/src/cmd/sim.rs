@@ -341,7 +341,7 @@ pub fn run(args: SimArgs) -> anyhow::Result<()> {
             args.options.out.display()
         );
     }
-    let mapped = args.options.write_slam_map();
+    let mapped = args.options.write_slam_map().map(|_| ());
     if s.reason == Reason::Interrupted {
         return Err(crate::interrupt::Interrupted.into());
     }

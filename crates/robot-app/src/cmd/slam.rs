@@ -10,7 +10,7 @@ use anyhow::Context;
 use clap::Args;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use scan_log::{LogOptions, LogSource};
-use scan_types::LaserSource;
+use scan_types::{LaserSource, ScanGeometry};
 
 use slam::{FrontEndParams, LogRun, LoopParams, SlamRun};
 
@@ -43,6 +43,11 @@ pub struct SlamArgs {
     /// The front end alone: no loop closure, no pose graph (for comparison).
     #[arg(long)]
     pub no_loop_closure: bool,
+    /// Centre each scan's search on the log's own pose change since the last placed scan
+    /// (odometry; a goalseek recording's estimate): the trajectory is then no longer the
+    /// laser's alone, and an evaluation against those same poses is no longer independent.
+    #[arg(long)]
+    pub motion_prior: bool,
     /// Map cell side, metres.
     #[arg(long, default_value_t = MAP_RESOLUTION_M)]
     pub resolution: f64,
@@ -129,17 +134,27 @@ pub fn run_log_topic(
     params: &FrontEndParams,
     loops: Option<&LoopParams>,
 ) -> anyhow::Result<SlamRun> {
-    run_log_live(path, topic, params, loops, None)
+    run_log_live(path, topic, params, loops, None, false)
+}
+
+/// [`run_log`] with the search centred on the log's own pose change (`--motion-prior`).
+pub fn run_log_with_motion(
+    path: &Path,
+    params: &FrontEndParams,
+    loops: Option<&LoopParams>,
+) -> anyhow::Result<SlamRun> {
+    run_log_live(path, None, params, loops, None, true)
 }
 
 /// [`run_log_topic`] showing every scan on `live`, with the front end's pose of it when the
-/// scan was placed.
+/// scan was placed; with `motion_prior`, each search is centred on the log's own pose change.
 pub fn run_log_live(
     path: &Path,
     topic: Option<&str>,
     params: &FrontEndParams,
     loops: Option<&LoopParams>,
     mut live: Option<&mut crate::live::LiveView>,
+    motion_prior: bool,
 ) -> anyhow::Result<SlamRun> {
     let options = LogOptions {
         topic: topic.map(str::to_string),
@@ -159,11 +174,12 @@ pub fn run_log_live(
         progress.tick();
         let placed = run.placed().len();
         // The simulator's truth, where the log has it, is the better reference.
-        run.add(
+        run.add_with_motion(
             rec.line,
             &rec.geometry,
             &rec.scan,
             rec.true_pose.or(rec.pose),
+            rec.pose.filter(|_| motion_prior),
         );
         if let Some(v) = live.as_deref_mut() {
             let estimate = run.placed().get(placed).map(|p| p.pose);
@@ -208,6 +224,24 @@ pub fn write_outputs(
     write_atomic(&dir.join("slam.json"), text.as_bytes())
 }
 
+/// The map of `placed` scans in the frame of their reference poses, placed by the first
+/// scan's reference pose alone (no fit to the rest); `None` when that scan has none.
+pub fn map_at_reference_start(
+    geometry: &ScanGeometry,
+    placed: &[slam::Placed],
+    resolution_m: f64,
+    max_range_m: f64,
+) -> Option<localiser::OccupancyGrid> {
+    let first = placed.first()?;
+    let to_reference = first.reference?.compose(&first.pose.inverse());
+    let scans: Vec<_> = placed
+        .iter()
+        .map(|p| (to_reference.compose(&p.pose), p.scan.clone()))
+        .collect();
+    let (grid, _) = localiser::build_map(geometry, &scans, resolution_m, max_range_m, false);
+    Some(grid)
+}
+
 /// Runs `robot-app slam`.
 pub fn run(args: SlamArgs) -> anyhow::Result<()> {
     super::check_map_options(args.resolution, args.max_range)?;
@@ -220,6 +254,7 @@ pub fn run(args: SlamArgs) -> anyhow::Result<()> {
         &params,
         loops,
         live.as_mut(),
+        args.motion_prior,
     )?;
     write_outputs(&args.out, &mut run, args.resolution, args.max_range)?;
     if let Some(v) = live {
@@ -261,4 +296,58 @@ pub fn run(args: SlamArgs) -> anyhow::Result<()> {
         );
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use localiser::CellState;
+    use scan_types::{Pose2, Scan, WorldPoint};
+
+    #[test]
+    fn the_map_is_placed_by_the_first_scans_reference_pose() {
+        // 21 rays over +-10 deg, each hitting a wall square to the robot 1.02 m ahead.
+        let geometry =
+            ScanGeometry::new(-10f64.to_radians(), 1f64.to_radians(), 21, 0.02, 4.0).unwrap();
+        let ranges: Vec<f64> = (0..21)
+            .map(|i| 1.02 / geometry.bearing_rad(i).cos())
+            .collect();
+        let scan = Scan::from_ranges(&geometry, &ranges, 0.0);
+        let placed = |pose: Pose2, reference: Option<Pose2>| slam::Placed {
+            time_s: 0.0,
+            pose,
+            reference,
+            scan: scan.clone(),
+        };
+        let half_pi = std::f64::consts::FRAC_PI_2;
+        // The estimate starts at (0.5, 0) facing +x, where the truth is (2, 3) facing +y; three
+        // scans there, then three turned about by the estimate, placed by that alone (their
+        // own references, far off, are not used).
+        let here = Pose2::new(0.5, 0.0, 0.0);
+        let on = Pose2::new(0.5, 0.0, std::f64::consts::PI);
+        let far = Some(Pose2::new(9.0, 9.0, 0.0));
+        let scans = [
+            placed(here, Some(Pose2::new(2.0, 3.0, half_pi))),
+            placed(here, far),
+            placed(here, far),
+            placed(on, far),
+            placed(on, far),
+            placed(on, far),
+        ];
+        let grid = map_at_reference_start(&geometry, &scans, 0.05, 4.0).unwrap();
+        // The walls: 1.02 m from (2, 3) along +y, and along -y.
+        for y in [4.02, 1.98] {
+            assert_eq!(
+                grid.state(WorldPoint::new(2.0, y)),
+                CellState::Occupied,
+                "y {y}"
+            );
+        }
+        assert_eq!(grid.state(WorldPoint::new(2.0, 3.5)), CellState::Free);
+        // Not where the estimate's own frame would put them.
+        assert_ne!(grid.state(WorldPoint::new(1.52, 0.0)), CellState::Occupied);
+        // No reference: no map.
+        let unreferenced = [placed(here, None)];
+        assert!(map_at_reference_start(&geometry, &unreferenced, 0.05, 4.0).is_none());
+    }
 }
