@@ -44,8 +44,8 @@ pub struct SlamArgs {
     #[arg(long)]
     pub no_loop_closure: bool,
     /// Centre each scan's search on the log's own pose change since the last placed scan
-    /// (odometry; a goalseek recording's estimate): the trajectory is then no longer the
-    /// laser's alone, and an evaluation against those same poses is no longer independent.
+    /// (its odometry, else its pose: a goalseek recording's estimate): the trajectory is then
+    /// no longer the laser's alone, and an evaluation against those poses is not independent.
     #[arg(long)]
     pub motion_prior: bool,
     /// Map cell side, metres.
@@ -179,7 +179,7 @@ pub fn run_log_live(
             &rec.geometry,
             &rec.scan,
             rec.true_pose.or(rec.pose),
-            rec.pose.filter(|_| motion_prior),
+            rec.odom_pose.or(rec.pose).filter(|_| motion_prior),
         );
         if let Some(v) = live.as_deref_mut() {
             let estimate = run.placed().get(placed).map(|p| p.pose);
