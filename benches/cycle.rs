@@ -7,6 +7,9 @@
 //! throughput is scans per second; the time per scan is the median divided by the scan count
 //! printed at the start. Goal: at most 0.5 ms per scan.
 //!
+//! `navigator/paper_run_replan` is the same with `[planner] replan_step_m = 0.25` (the run
+//! recorded with it).
+//!
 //! `cycle_step/*` times each step alone on 685-ray scans of the paper world, with the
 //! parameters the navigator derives from the goalseek preset.
 //!
@@ -79,10 +82,16 @@ impl Monitor for Scans {
     }
 }
 
+/// goalseek's parameters with `[planner] replan_step_m` set.
+fn with_replan(replan_step_m: f64) -> Params {
+    let mut p = Params::goalseek();
+    p.planner.replan_step_m = replan_step_m;
+    p
+}
+
 /// The scans of the simulated paper run, seed 0, in the order the navigator took them.
-fn paper_run_scans() -> Vec<Scan> {
+fn paper_run_scans(params: Params) -> Vec<Scan> {
     let preset = SensorPreset::Paper;
-    let params = Params::goalseek();
     let sim = Simulation::new(
         Arc::new(World::paper()),
         preset,
@@ -125,20 +134,26 @@ fn replay(mut nav: Navigator, scans: &[Scan]) -> usize {
 fn bench_cycle(c: &mut Criterion) {
     let g = ScanGeometry::paper();
     assert_eq!(g.ray_count, 685);
-    let scans = paper_run_scans();
-    let new = || Navigator::new(Params::goalseek(), g, paper_start(), paper_target()).unwrap();
-    // The replay drives the same run: every recorded scan is used.
-    let legs = replay(new(), &scans);
-    println!("paper run: {} scans, {legs} legs", scans.len());
+    // goalseek as it is, and with the leg checked every 0.25 m while driving.
     let mut group = c.benchmark_group("navigator");
-    group.throughput(Throughput::Elements(scans.len() as u64));
-    group.bench_function("paper_run", |b| {
-        b.iter_batched(
-            new,
-            |nav| black_box(replay(nav, &scans)),
-            BatchSize::SmallInput,
-        )
-    });
+    for (name, step) in [
+        ("paper_run", Params::goalseek().planner.replan_step_m),
+        ("paper_run_replan", 0.25),
+    ] {
+        let scans = paper_run_scans(with_replan(step));
+        let new = || Navigator::new(with_replan(step), g, paper_start(), paper_target()).unwrap();
+        // The replay drives the same run: every recorded scan is used.
+        let legs = replay(new(), &scans);
+        println!("{name}: {} scans, {legs} legs", scans.len());
+        group.throughput(Throughput::Elements(scans.len() as u64));
+        group.bench_function(name, |b| {
+            b.iter_batched(
+                new,
+                |nav| black_box(replay(nav, &scans)),
+                BatchSize::SmallInput,
+            )
+        });
+    }
     group.finish();
 
     let cfg = Params::goalseek();

@@ -40,7 +40,8 @@ pub(crate) struct Drive {
     pub(crate) kind: LegKind,
     /// The estimate at the start of the leg.
     pub(crate) origin: Pose2,
-    limit_m: f64,
+    /// The most the leg drives, metres.
+    pub(crate) limit_m: f64,
     step_m: f64,
     stop_at_side: bool,
     tracker: Option<Tracker>,
@@ -58,6 +59,19 @@ pub(crate) struct Drive {
     /// laser), not from the commands or a landmark fix alone.
     pub(crate) laser_measured: bool,
     pub(crate) last_scan: Scan,
+    /// `[planner] replan_step_m`: the rest of the leg judged on the planner's map while
+    /// driving (`None`: not watched).
+    pub(crate) watch: Option<Watch>,
+}
+
+/// What a watched leg is judged against.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Watch {
+    /// Progress toward the target per metre of the leg when it was planned: the path length
+    /// from its start less that from its end, over its length.
+    pub(crate) rate: f64,
+    /// Commanded travel at the last check, metres.
+    pub(crate) checked_m: f64,
 }
 
 impl Drive {
@@ -94,11 +108,12 @@ impl Drive {
             fix: None,
             laser_measured: false,
             last_scan: scan,
+            watch: None,
         }
     }
 
     /// The travel measured so far: the last landmark fix plus the commands since.
-    fn measured_m(&self) -> f64 {
+    pub(crate) fn measured_m(&self) -> f64 {
         self.fix
             .map_or(self.commanded_m, |(m, c)| m + self.commanded_m - c)
     }

@@ -12,7 +12,7 @@ use crate::MAX_COORD_M;
 /// Legs commanded shorter than this are not judged for a stall, metres.
 const STALL_JUDGED_M: f64 = 0.2;
 use crate::clearance::{block_by_unseen_hits, denoised, erode};
-use crate::drive::{Drive, LegKind};
+use crate::drive::{Drive, LegKind, Watch};
 use crate::revisit::Revisits;
 use crate::{HeadingRule, Leg, NarrowPassage, NavigatorError, Outcome, Params, PlanRule, Reason};
 
@@ -92,6 +92,15 @@ const NARROW_RETRIES: usize = 6;
 /// slam front end's `max_refine_shift_m`).
 const SLAM_REFINE_TURN_DEG: f64 = 2.0;
 
+/// A watched leg's progress is judged only when it was planned to gain at least this much
+/// per metre toward the target (a detour planned sideways is left alone).
+const WATCH_MIN_RATE: f64 = 0.2;
+/// A watched leg ends when the rest of it now gains less than this share of the progress it
+/// was planned for...
+const WATCH_KEEP_SHARE: f64 = 0.5;
+/// ...less this slack (the grid's quantisation), metres.
+const WATCH_SLACK_M: f64 = 0.1;
+
 /// The goal-seeking loop of `docs/method.md` for one run, from `start` to `goal`.
 ///
 /// Feed it with the driver loop of [`crate::run`] or your own: answer [`Action::Scan`] with
@@ -154,6 +163,8 @@ pub struct Navigator {
     revisits: Revisits,
     /// The leg of the last revisit correction (0: none yet).
     last_revisit_leg: usize,
+    /// Legs ended early by `[planner] replan_step_m`.
+    legs_cut_short: usize,
 }
 
 impl Navigator {
@@ -230,6 +241,7 @@ impl Navigator {
             sigma_position_m: 0.0,
             revisits: Revisits::default(),
             last_revisit_leg: 0,
+            legs_cut_short: 0,
         })
     }
 
@@ -287,6 +299,12 @@ impl Navigator {
     /// Scans accepted so far.
     pub fn scans(&self) -> usize {
         self.scans
+    }
+
+    /// Legs ended early so far because the map seen while driving showed they no longer led
+    /// toward the target (`[planner] replan_step_m`).
+    pub fn legs_cut_short(&self) -> usize {
+        self.legs_cut_short
     }
 
     /// The occupancy grid built so far.
@@ -790,7 +808,8 @@ impl Navigator {
         };
         self.slam_anchor = (origin, 0.0);
         self.slam_leg_pose = None;
-        let drive = Drive::new(self, kind, origin, limit_m, landmark, scan);
+        let mut drive = Drive::new(self, kind, origin, limit_m, landmark, scan);
+        drive.watch = self.watch_of(kind, origin, limit_m, narrow.is_some());
         self.drive_step(Box::new(drive))
     }
 
@@ -812,11 +831,99 @@ impl Navigator {
         if self.slam.is_some() && since >= self.params.localiser.slam_step_m - 1e-9 {
             self.slam_drive_scan(scan, drive.commanded_m);
         }
-        if drive.scanned(self, scan) {
+        if drive.scanned(self, scan) && !self.leg_outdated(&mut drive, scan) {
             self.drive_step(drive)
         } else {
             self.end_leg(drive)
         }
+    }
+
+    /// `[planner] replan_step_m`: how a leg about to be driven stands on the planner's map,
+    /// or `None` when it is not watched (off, greedy, a final or narrow leg, a short leg).
+    fn watch_of(
+        &mut self,
+        kind: LegKind,
+        origin: Pose2,
+        limit_m: f64,
+        narrow: bool,
+    ) -> Option<Watch> {
+        let step = self.params.planner.replan_step_m;
+        if step <= 0.0
+            || narrow
+            || self.params.planner.rule != PlanRule::MapPath
+            || matches!(kind, LegKind::Final)
+            || limit_m < 2.0 * step
+        {
+            return None;
+        }
+        let c = self.planner.check_leg(&origin, limit_m, self.goal);
+        let rate = match (c.from_start_m, c.from_end_m) {
+            (Some(a), Some(b)) => (a - b) / limit_m,
+            _ => 0.0,
+        };
+        Some(Watch {
+            rate,
+            checked_m: 0.0,
+        })
+    }
+
+    /// `[planner] replan_step_m`: every so much travel, judges the rest of the leg on the
+    /// planner's map with the scan's hits added at the pose reached, when they occupy a new
+    /// cell. True when the leg should end here: the rest runs into an obstacle's lethal
+    /// core, or now gains clearly less toward the target than it was planned to.
+    fn leg_outdated(&mut self, drive: &mut Drive, scan: &Scan) -> bool {
+        let step = self.params.planner.replan_step_m;
+        let Some(mut w) = drive.watch else {
+            return false;
+        };
+        if drive.commanded_m - w.checked_m < step - 1e-9 {
+            return false;
+        }
+        w.checked_m = drive.commanded_m;
+        drive.watch = Some(w);
+        let remaining = drive.limit_m - drive.commanded_m;
+        if remaining < step {
+            // The leg ends within the next step anyway.
+            return false;
+        }
+        let at = drive
+            .origin
+            .compose(&Pose2::new(drive.measured_m(), 0.0, 0.0));
+        // The scan's hits count for the check only: the leg's end adds them localised.
+        let Some(c) =
+            self.planner
+                .check_leg_with_scan(&at, &self.geometry, scan, remaining, self.goal)
+        else {
+            return false;
+        };
+        let gain = match (c.from_start_m, c.from_end_m) {
+            (Some(a), Some(b)) => Some(a - b),
+            _ => None,
+        };
+        let why = if c.free_m < remaining - 1e-9 {
+            "it runs into an obstacle seen while driving"
+        } else if w.rate < WATCH_MIN_RATE {
+            return false;
+        } else {
+            match (c.from_start_m, gain) {
+                (_, Some(g)) if g < WATCH_KEEP_SHARE * w.rate * remaining - WATCH_SLACK_M => {
+                    "its rest no longer leads toward the target"
+                }
+                (Some(_), None) => "its end is cut off from the target",
+                _ => return false,
+            }
+        };
+        self.legs_cut_short += 1;
+        tracing::info!(
+            leg = self.legs,
+            driven_m = drive.commanded_m,
+            remaining_m = remaining,
+            free_m = c.free_m,
+            gain_m = gain,
+            planned_rate = w.rate,
+            "leg cut short: {why}"
+        );
+        true
     }
 
     /// Localises at the leg's end and maps (steps 7-8), counts the try and plans again.

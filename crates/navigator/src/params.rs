@@ -107,6 +107,12 @@ pub struct PlanningParams {
     /// While the robot turns in place, hits seen earlier from the same spot that have left the
     /// field of view still cut the rays' clearance (the paper: no memory).
     pub remember_turned_away_hits: bool,
+    /// While a leg is driven (map_path only), every this much travel the scan's hits join the
+    /// planner's map and the rest of the leg is judged on it: a leg that no longer leads toward
+    /// the target, or runs into a newly seen obstacle, ends early, metres. 0 = off (the paper;
+    /// also what a stored configuration without the key means).
+    #[serde(default)]
+    pub replan_step_m: f64,
 }
 
 /// Landmark detection and selection.
@@ -456,6 +462,8 @@ impl Params {
                 grid_resolution_m: 0.1,
                 width_window_deg: 2.0,
                 remember_turned_away_hits: true,
+                // Off: measured no better (docs/navigator.md, "Replanning while driving").
+                replan_step_m: 0.0,
             },
             landmarks: LandmarkParams {
                 neighbour_n: 1,
@@ -535,6 +543,7 @@ impl Params {
         c.planner.rule = PlanRule::Greedy;
         c.planner.width_window_deg = 0.0;
         c.planner.remember_turned_away_hits = false;
+        c.planner.replan_step_m = 0.0;
         c.landmarks.range_limit_margin_m = 0.0;
         c.tracking.gate_m = 0.2;
         c.localiser.heading_rule = HeadingRule::Commanded;
@@ -604,6 +613,7 @@ impl Params {
             ("planner.max_leg_m", p.max_leg_m, 0.0, 100.0, true),
             ("planner.grid_resolution_m", p.grid_resolution_m, 0.01, 1.0, false),
             ("planner.width_window_deg", p.width_window_deg, 0.0, 90.0, false),
+            ("planner.replan_step_m", p.replan_step_m, 0.0, 100.0, false),
             ("landmarks.neighbour_n", count(l.neighbour_n), 1.0, 100.0, false),
             ("landmarks.max_bearing_deg", l.max_bearing_deg, 0.0, 180.0, true),
             ("landmarks.range_limit_margin_m", l.range_limit_margin_m, 0.0, 10.0, false),
@@ -737,6 +747,7 @@ mod tests {
         assert_eq!(p.robot.radius_m, 0.3);
         assert_eq!(Params::preset(Method::Paper), p);
         assert!(p.validate().is_ok() && g.validate().is_ok());
+        assert_eq!(p.planner.replan_step_m, 0.0);
     }
 
     #[test]
@@ -774,6 +785,14 @@ mod tests {
                 .unwrap_err()
                 .to_string()
                 .contains("robot.radius_m")
+        );
+        let mut p = Params::goalseek();
+        p.planner.replan_step_m = -0.25;
+        assert!(
+            p.validate()
+                .unwrap_err()
+                .to_string()
+                .contains("planner.replan_step_m")
         );
         let mut p = Params::goalseek();
         p.navigator.max_legs = 0;

@@ -233,6 +233,18 @@ struct Candidate {
     narrow: Option<NarrowSpot>,
 }
 
+/// The rest of a leg judged on the memory as it is now ([`Planner::check_leg`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LegCheck {
+    /// How far along the leg the robot stays out of the lethal core of remembered
+    /// obstacles, metres (the leg's length when nothing blocks it).
+    pub free_m: f64,
+    /// Path length from the leg's start to the target, metres (`None`: no path).
+    pub from_start_m: Option<f64>,
+    /// Path length from the leg's end to the target, metres (`None`: no path).
+    pub from_end_m: Option<f64>,
+}
+
 /// Chooses rays toward a target; remembers obstacles for [`PlanRule::MapPath`].
 #[derive(Debug, Clone)]
 pub struct Planner {
@@ -250,6 +262,8 @@ pub struct Planner {
     open_gaps: Vec<WorldPoint>,
     /// Whether this plan's field passes through the band (the full margin found no way).
     through_band: bool,
+    /// Scratch: the hits added for one check.
+    scratch_hits: Vec<WorldPoint>,
 }
 
 impl Planner {
@@ -287,6 +301,7 @@ impl Planner {
             gaps: Vec::new(),
             open_gaps: Vec::new(),
             through_band: false,
+            scratch_hits: Vec::new(),
         }
     }
 
@@ -318,6 +333,62 @@ impl Planner {
                     .add_hit(pose.transform_point(RobotPoint::new(r * dirs[i][0], r * dirs[i][1])));
             }
         }
+    }
+
+    /// Judges the leg of `length_m` straight ahead of `from` on the memory as it is now: where
+    /// a remembered obstacle's lethal core blocks it, and the path lengths to `target` from
+    /// its start and its end over the field of the last plan's kind (through the band or
+    /// not), recomputed only when the memory or the target changed.
+    pub fn check_leg(&mut self, from: &Pose2, length_m: f64, target: WorldPoint) -> LegCheck {
+        let length_m = if length_m.is_finite() {
+            length_m.max(0.0)
+        } else {
+            0.0
+        };
+        let free_m = self.memory_cap_m(from, 0.0, length_m, true);
+        self.memory.ensure_contains(from.position());
+        self.memory.update_field_through(target, self.through_band);
+        let end = from.advanced(length_m).position();
+        LegCheck {
+            free_m,
+            from_start_m: self.memory.path_length_m(from.position()),
+            from_end_m: self.memory.path_length_m(end),
+        }
+    }
+
+    /// [`Planner::check_leg`] on the memory with the hits of `scan`, taken at `from`, added for
+    /// the check only (the memory is left as it was: a scan taken while driving, not yet
+    /// localised, is not remembered); `None` when the scan occupies no new cell (nothing new
+    /// to judge on).
+    pub fn check_leg_with_scan(
+        &mut self,
+        from: &Pose2,
+        geometry: &ScanGeometry,
+        scan: &Scan,
+        length_m: f64,
+        target: WorldPoint,
+    ) -> Option<LegCheck> {
+        self.memory.ensure_contains(from.position());
+        let n = geometry.ray_count.min(scan.len());
+        let dirs = geometry.directions();
+        let mut added = std::mem::take(&mut self.scratch_hits);
+        added.clear();
+        let mut new = false;
+        for i in 0..n {
+            if let Some(r) = scan.hit_range_m(i).filter(|r| r.is_finite() && *r >= 0.0) {
+                let p = from.transform_point(RobotPoint::new(r * dirs[i][0], r * dirs[i][1]));
+                if let Some(fresh) = self.memory.count_hit(p) {
+                    new |= fresh;
+                    added.push(p);
+                }
+            }
+        }
+        let check = new.then(|| self.check_leg(from, length_m, target));
+        for &p in &added {
+            self.memory.uncount_hit(p);
+        }
+        self.scratch_hits = added;
+        check
     }
 
     /// Chooses the next ray from `pose` toward `target`, given the clearance of every ray of

@@ -143,16 +143,40 @@ impl ObstacleMemory {
 
     /// Remembers a world-frame hit point.
     pub fn add_hit(&mut self, p: WorldPoint) {
+        self.count_hit(p);
+    }
+
+    /// [`ObstacleMemory::add_hit`]; `Some(true)` when the hit made its cell occupied,
+    /// `Some(false)` when it was counted in an occupied cell, `None` when not counted (not
+    /// finite, off the grid, or the cell's count saturated).
+    pub(crate) fn count_hit(&mut self, p: WorldPoint) -> Option<bool> {
         if !(p.x_m().is_finite() && p.y_m().is_finite()) {
-            return;
+            return None;
         }
         self.ensure_contains(p);
-        let Some(c) = self.cell_of(p) else { return };
-        if self.hits[c] == 0 {
+        let c = self.cell_of(p)?;
+        if self.hits[c] == u16::MAX {
+            return None;
+        }
+        let new = self.hits[c] == 0;
+        if new {
             self.stamp_cell(c);
             self.version += 1;
         }
-        self.hits[c] = self.hits[c].saturating_add(1);
+        self.hits[c] += 1;
+        Some(new)
+    }
+
+    /// Takes back one hit counted by [`ObstacleMemory::count_hit`] at `p`.
+    pub(crate) fn uncount_hit(&mut self, p: WorldPoint) {
+        let Some(c) = self.cell_of(p).filter(|&c| self.hits[c] > 0) else {
+            return;
+        };
+        self.hits[c] -= 1;
+        if self.hits[c] == 0 {
+            self.stamp_cell_by(c, -1);
+            self.version += 1;
+        }
     }
 
     /// Grows the grid (keeping its content) so that `p` lies inside with room around it.
@@ -243,6 +267,11 @@ impl ObstacleMemory {
     }
 
     fn stamp_cell(&mut self, c: usize) {
+        self.stamp_cell_by(c, 1);
+    }
+
+    /// Adds `by` (1 or -1) to the counts of the cells around `c`.
+    fn stamp_cell_by(&mut self, c: usize, by: i32) {
         let (col, row) = ((c % self.width) as i32, (c / self.width) as i32);
         let (w, h) = (self.width, self.height);
         let within = move |(dx, dy): (i32, i32)| {
@@ -250,11 +279,18 @@ impl ObstacleMemory {
             (x >= 0 && y >= 0 && (x as usize) < w && (y as usize) < h)
                 .then(|| y as usize * w + x as usize)
         };
+        let add = |v: u16| {
+            if by > 0 {
+                v.saturating_add(1)
+            } else {
+                v.saturating_sub(1)
+            }
+        };
         for k in self.stamp.iter().filter_map(|&o| within(o)) {
-            self.blocked[k] = self.blocked[k].saturating_add(1);
+            self.blocked[k] = add(self.blocked[k]);
         }
         for k in self.band_stamp.iter().filter_map(|&o| within(o)) {
-            self.near[k] = self.near[k].saturating_add(1);
+            self.near[k] = add(self.near[k]);
         }
     }
 

@@ -389,3 +389,60 @@ fn walled_in_target_is_reported_unreachable() {
     assert!(!out.reached && out.collisions == 0, "{out:?}");
     assert!(out.unreachable, "{out:?}");
 }
+
+#[test]
+fn a_leg_is_judged_on_what_the_memory_holds_now() {
+    // A 2 m leg along +x from the origin toward a target 5 m ahead.
+    let g = ScanGeometry::paper();
+    let from = Pose2::new(0.0, 0.0, 0.0);
+    let target = WorldPoint::new(5.0, 0.0);
+    let mut planner = Planner::new(PlannerParams::default());
+    let empty = planner.check_leg(&from, 2.0, target);
+    // Nothing remembered: free all along, straight paths of 5 and 3 m (0.1 m cells).
+    assert_eq!(empty.free_m, 2.0);
+    assert!(
+        (empty.from_start_m.unwrap() - 5.0).abs() < 0.15,
+        "{empty:?}"
+    );
+    assert!((empty.from_end_m.unwrap() - 3.0).abs() < 0.15, "{empty:?}");
+    // A wall across the leg at x = 1.5 (y -1..1), seen from the start.
+    let wall = vec![((1.5, -1.0), (1.5, 1.0))];
+    planner.add_scan(&from, &g, &testkit::scan_at(&g, &wall, 0.0, 0.0, 0.0));
+    let c = planner.check_leg(&from, 2.0, target);
+    // The lethal core reaches r + narrow margin - one cell = 0.225 m, i.e. 2 cells, from the
+    // hit's cell, which starts in (1.4, 1.5]: the first blocked 5 cm step lies in [1.2, 1.35]
+    // (a step right on a cell's edge may fall either side), and the leg is free to the step
+    // before it: 1.15 to 1.3 m.
+    assert!(c.free_m > 1.15 - 1e-9 && c.free_m < 1.3 + 1e-9, "{c:?}");
+    // The start's way now goes around an end of the wall (past y = 1 + 0.3 m of inflation):
+    // at least twice hypot(1.5, 1.3) = 3.97 m to get level with it and beyond, more than 5 m
+    // in all; the end, behind the wall, still has its straight 3 m.
+    let (a, b) = (c.from_start_m.unwrap(), c.from_end_m.unwrap());
+    assert!(a > 5.5, "{c:?}");
+    assert!((b - 3.0).abs() < 0.15, "{c:?}");
+}
+
+#[test]
+fn a_scan_added_for_a_check_only_is_not_remembered() {
+    // The wall of the test above, seen in a scan added for one check only.
+    let g = ScanGeometry::paper();
+    let from = Pose2::new(0.0, 0.0, 0.0);
+    let target = WorldPoint::new(5.0, 0.0);
+    let wall = vec![((1.5, -1.0), (1.5, 1.0))];
+    let scan = testkit::scan_at(&g, &wall, 0.0, 0.0, 0.0);
+    let mut planner = Planner::new(PlannerParams::default());
+    let c = planner
+        .check_leg_with_scan(&from, &g, &scan, 2.0, target)
+        .expect("the wall occupies new cells");
+    assert!(c.free_m < 1.3 + 1e-9, "{c:?}");
+    // Afterwards the memory is empty again, and the leg free.
+    assert_eq!(planner.memory().hit_cells(), 0);
+    assert_eq!(planner.check_leg(&from, 2.0, target).free_m, 2.0);
+    // Once remembered, the same scan brings nothing new to check.
+    planner.add_scan(&from, &g, &scan);
+    assert!(
+        planner
+            .check_leg_with_scan(&from, &g, &scan, 2.0, target)
+            .is_none()
+    );
+}
