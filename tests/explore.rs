@@ -160,6 +160,68 @@ fn the_slam_map_of_an_exploration_is_scored_against_the_true_world() {
     }
 }
 
+/// `--seeds 0..2`: one exploration per seed in its own folder, and `explore-batch.json` with
+/// both runs, their minimum and median figures, and every key named by its unit.
+#[test]
+fn explore_seeds_runs_one_exploration_per_seed() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let argv: [&OsStr; 7] = [
+        "explore".as_ref(),
+        "--seeds".as_ref(),
+        "0..2".as_ref(),
+        "--max-goals".as_ref(),
+        "3".as_ref(),
+        "--out".as_ref(),
+        out.as_os_str(),
+    ];
+    let args = ExploreCli::try_parse_from(argv).unwrap().args;
+    robot_app::cmd::explore::run(args).expect("both explorations run");
+    let read = |p: &Path| -> serde_json::Value {
+        serde_json::from_str(&std::fs::read_to_string(p).unwrap()).unwrap()
+    };
+    let batch = read(&out.join("explore-batch.json"));
+    let one: Vec<serde_json::Value> = (0..2)
+        .map(|s| read(&out.join(format!("seed-{s}/explore.json"))))
+        .collect();
+    assert_eq!(batch["runs"].as_array().unwrap().len(), 2, "{batch}");
+    for (s, run) in one.iter().enumerate() {
+        assert_eq!(run["seed"], s as u64, "{run}");
+        assert_eq!(&batch["runs"][s], run);
+    }
+    let a = &batch["aggregates"];
+    assert_eq!(a["runs"], 2);
+    let cov: Vec<f64> = one
+        .iter()
+        .map(|r| r["coverage_share"].as_f64().unwrap())
+        .collect();
+    assert_eq!(
+        a["min_coverage_share"].as_f64().unwrap(),
+        cov[0].min(cov[1])
+    );
+    let mid = a["median_coverage_share"].as_f64().unwrap();
+    assert!((mid - 0.5 * (cov[0] + cov[1])).abs() < 1e-12, "{a}");
+    assert!(a["median_slam_map_accuracy_share"].is_null(), "{a}");
+    assert_eq!(
+        key_units::keys_without_unit(&batch),
+        Vec::<String>::new(),
+        "{batch}"
+    );
+    // A single seed and a range together are refused by name.
+    let both: [&OsStr; 5] = [
+        "explore".as_ref(),
+        "--seeds".as_ref(),
+        "0..2".as_ref(),
+        "--seed".as_ref(),
+        "1".as_ref(),
+    ];
+    let e = match ExploreCli::try_parse_from(both) {
+        Ok(_) => panic!("--seeds with --seed parsed"),
+        Err(e) => e.to_string(),
+    };
+    assert!(e.contains("--seed"), "{e}");
+}
+
 /// Explores `world` with `seed` and the extra arguments; its `explore.json`.
 fn explore_json(world: &Path, seed: &str, extra: &[&OsStr]) -> serde_json::Value {
     let dir = tempfile::tempdir().unwrap();

@@ -14,7 +14,7 @@ use crate::outputs::write_atomic;
 use crate::runloop::explore_loop;
 
 /// Arguments of `robot-app explore`.
-#[derive(Debug, Args)]
+#[derive(Debug, Clone, Args)]
 pub struct ExploreArgs {
     /// World, sensor, seed and noise (as `sim`).
     #[command(flatten)]
@@ -31,6 +31,10 @@ pub struct ExploreArgs {
     /// `serial:PATH[@BAUD]` or manual (the default).
     #[arg(long, value_name = "BASE", requires = "port")]
     pub base: Option<String>,
+    /// Explore once per seed A..B (B excluded), each into OUT/seed-N/, and write
+    /// OUT/explore-batch.json with every run and their minimum and median figures.
+    #[arg(long, value_name = "A..B", conflicts_with_all = ["seed", "port", "record", "live"])]
+    pub seeds: Option<String>,
     /// Most frontiers to try.
     #[arg(long, default_value_t = ExploreParams::default().max_goals)]
     pub max_goals: usize,
@@ -161,6 +165,9 @@ struct Explored {
 
 /// Runs `robot-app explore`: in the simulator, or with `--port` on a real Hokuyo and base.
 pub fn run(args: ExploreArgs) -> anyhow::Result<()> {
+    if let Some(seeds) = args.seeds.clone() {
+        return super::explore_batch::run(args, &seeds);
+    }
     let params = ExploreParams {
         max_goals: args.max_goals,
         legs_per_goal: args.legs_per_goal,

@@ -4,6 +4,7 @@ pub mod batch;
 pub mod emulate;
 pub mod expand;
 pub mod explore;
+pub mod explore_batch;
 pub mod info;
 pub mod landmarks;
 pub mod map;

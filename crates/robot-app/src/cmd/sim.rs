@@ -16,7 +16,7 @@ use scan_log::write_trajectory;
 pub const SUCCESS_RADIUS_M: f64 = 0.3;
 
 /// The simulated world, sensor, seed and noise: the options `sim` and `explore` share.
-#[derive(Debug, Args)]
+#[derive(Debug, Clone, Args)]
 pub struct SimWorldArgs {
     /// World file: goalseek .toml (with its own start and target), map_server .yaml, or a
     /// Stage .png (0.02 m per pixel; give another size in a .yaml or .toml beside it). Default:
