@@ -59,7 +59,12 @@ def main():
     floor.ZS[:] = [-1.0, 0.0, 1.0]
     scans = floor.read_flaser(floor.LOGS[a.log])
     points = [floor.pts2d(r, 180.0) for r, _ in scans]
-    closures = json.load(open(pathlib.Path(a.slam_dir) / "slam.json"))["loop_closure"]["closures"]
+    report = json.load(open(pathlib.Path(a.slam_dir) / "slam.json"))
+    # Closures name placed scans; they are the log's FLASER scans only when all were placed.
+    if not report["placed"] == report["scans"] == len(scans):
+        sys.exit(f"{a.slam_dir}: {report['placed']} of {report['scans']} scans placed, "
+                 f"{len(scans)} FLASER lines: closure indices would not match")
+    closures = report["loop_closure"]["closures"]
     runs = {(m, s): [] for m in ("point", "plane") for s in ("reference", "closure")}
     off = []
     for c in closures:

@@ -118,6 +118,16 @@ impl Drive {
             .map_or(self.commanded_m, |(m, c)| m + self.commanded_m - c)
     }
 
+    /// What is left of the leg as planned: to B when the landmark gives its distance (the
+    /// drive stops there), else to the limit, metres.
+    pub(crate) fn remaining_m(&self) -> f64 {
+        let to_limit = self.limit_m - self.commanded_m;
+        match (self.stop_at_side, self.ob0) {
+            (true, Some(ob)) => (ob - self.measured_m()).min(to_limit),
+            _ => to_limit,
+        }
+    }
+
     /// The next step to command, or `None` when the drive is over.
     pub(crate) fn next_step_m(&self) -> Option<f64> {
         let (limit, commanded) = (self.limit_m, self.commanded_m);

@@ -809,7 +809,7 @@ impl Navigator {
         self.slam_anchor = (origin, 0.0);
         self.slam_leg_pose = None;
         let mut drive = Drive::new(self, kind, origin, limit_m, landmark, scan);
-        drive.watch = self.watch_of(kind, origin, limit_m, narrow.is_some());
+        drive.watch = self.watch_of(kind, origin, drive.remaining_m(), narrow.is_some());
         self.drive_step(Box::new(drive))
     }
 
@@ -838,8 +838,9 @@ impl Navigator {
         }
     }
 
-    /// `[planner] replan_step_m`: how a leg about to be driven stands on the planner's map,
-    /// or `None` when it is not watched (off, greedy, a final or narrow leg, a short leg).
+    /// `[planner] replan_step_m`: how a leg about to be driven `limit_m` (to B for a leg to
+    /// B) stands on the planner's map, or `None` when it is not watched (off, greedy, a final
+    /// or narrow leg, a short leg).
     fn watch_of(
         &mut self,
         kind: LegKind,
@@ -881,7 +882,7 @@ impl Navigator {
         }
         w.checked_m = drive.commanded_m;
         drive.watch = Some(w);
-        let remaining = drive.limit_m - drive.commanded_m;
+        let remaining = drive.remaining_m();
         if remaining < step {
             // The leg ends within the next step anyway.
             return false;

@@ -2,8 +2,11 @@
 //! driving ends when the wall is seen.
 
 use navigator::{Action, Navigator, Params, Reason};
-use scan_types::testkit::{Seg, boxed, scan_at};
+use scan_types::testkit::{Seg, boxed};
 use scan_types::{Pose2, ScanGeometry, WorldPoint};
+
+#[path = "common/base.rs"]
+mod base;
 
 /// The paper's laser reads at most this far, metres.
 const MAX_RANGE_M: f64 = 4.0;
@@ -30,30 +33,15 @@ fn run(replan_step_m: f64) -> (Action, f64, usize) {
     let segs = world();
     let g = ScanGeometry::paper();
     assert_eq!(g.max_range_m, MAX_RANGE_M);
-    let mut truth = Pose2::new(0.9, 0.0, 0.0);
-    let mut nav = Navigator::new(p, g, truth, WorldPoint::new(10.0, 0.0)).unwrap();
-    let mut farthest = truth.x_m;
-    for _ in 0..20_000 {
-        match nav.pending() {
-            Action::Scan => {
-                let scan = scan_at(&g, &segs, truth.x_m, truth.y_m, truth.theta_rad);
-                nav.on_scan(&scan);
-            }
-            Action::Rotate { angle_rad } => {
-                truth = truth.rotated(angle_rad);
-                nav.on_motion_done();
-            }
-            Action::Forward { distance_m } => {
-                truth = truth.advanced(distance_m);
-                // Inside the pocket only (the target lies behind it).
-                if truth.y_m.abs() < 0.7 && truth.x_m < BACK_X {
-                    farthest = farthest.max(truth.x_m);
-                }
-                nav.on_motion_done();
-            }
-            Action::Finish(_) => break,
+    let start = Pose2::new(0.9, 0.0, 0.0);
+    let mut nav = Navigator::new(p, g, start, WorldPoint::new(10.0, 0.0)).unwrap();
+    let mut farthest = start.x_m;
+    base::drive(&mut nav, &segs, start, (1.0, 1.0), |t| {
+        // Inside the pocket only (the target lies behind it).
+        if t.y_m.abs() < 0.7 && t.x_m < BACK_X {
+            farthest = farthest.max(t.x_m);
         }
-    }
+    });
     (nav.pending(), farthest, nav.legs_cut_short())
 }
 

@@ -3,34 +3,18 @@
 //! out to a target and back to the start.
 
 use navigator::{Action, HeadingRule, Navigator, Params, Reason, TravelRule};
-use scan_types::testkit::{Seg, scan_at};
+use scan_types::testkit::Seg;
 
+#[path = "common/base.rs"]
+mod base;
 #[path = "common/room.rs"]
 mod room;
 use room::room;
 use scan_types::{Pose2, ScanGeometry, WorldPoint};
 
 /// Drives `nav` on the scaled base from `truth` until it finishes; the true pose then.
-fn drive(nav: &mut Navigator, segs: &[Seg], mut truth: Pose2) -> Pose2 {
-    let g = *nav.geometry();
-    for _ in 0..20_000 {
-        match nav.pending() {
-            Action::Scan => {
-                let scan = scan_at(&g, segs, truth.x_m, truth.y_m, truth.theta_rad);
-                nav.on_scan(&scan);
-            }
-            Action::Rotate { angle_rad } => {
-                truth = truth.rotated(angle_rad * 0.96);
-                nav.on_motion_done();
-            }
-            Action::Forward { distance_m } => {
-                truth = truth.compose(&Pose2::new(distance_m * 1.06, 0.0, 0.0));
-                nav.on_motion_done();
-            }
-            Action::Finish(_) => break,
-        }
-    }
-    truth
+fn drive(nav: &mut Navigator, segs: &[Seg], truth: Pose2) -> Pose2 {
+    base::drive(nav, segs, truth, (0.96, 1.06), |_| {})
 }
 
 /// Out from (1, 1) to (7, 4) and back; the estimate's error at the target and at the end.

@@ -4,6 +4,8 @@
 use navigator::{Action, HeadingRule, Navigator, Params, Reason, TravelRule};
 use scan_types::testkit::{boxed, scan_at};
 
+#[path = "common/base.rs"]
+mod base;
 #[path = "common/room.rs"]
 mod room;
 use room::room;
@@ -17,24 +19,7 @@ fn run(params: Params, turn_scale: f64, drive_scale: f64) -> (Reason, Pose2, Pos
     let start = Pose2::new(1.0, 1.0, 0.0);
     let goal = WorldPoint::new(7.0, 4.0);
     let mut nav = Navigator::new(params, g, start, goal).unwrap();
-    let mut truth = start;
-    for _ in 0..20_000 {
-        match nav.pending() {
-            Action::Scan => {
-                let scan = scan_at(&g, &segs, truth.x_m, truth.y_m, truth.theta_rad);
-                nav.on_scan(&scan);
-            }
-            Action::Rotate { angle_rad } => {
-                truth = truth.rotated(angle_rad * turn_scale);
-                nav.on_motion_done();
-            }
-            Action::Forward { distance_m } => {
-                truth = truth.compose(&Pose2::new(distance_m * drive_scale, 0.0, 0.0));
-                nav.on_motion_done();
-            }
-            Action::Finish(_) => break,
-        }
-    }
+    let truth = base::drive(&mut nav, &segs, start, (turn_scale, drive_scale), |_| {});
     let estimate = nav.estimate();
     (nav.into_outcome().reason, estimate, truth)
 }

@@ -414,9 +414,9 @@ fn a_leg_is_judged_on_what_the_memory_holds_now() {
     // (a step right on a cell's edge may fall either side), and the leg is free to the step
     // before it: 1.15 to 1.3 m.
     assert!(c.free_m > 1.15 - 1e-9 && c.free_m < 1.3 + 1e-9, "{c:?}");
-    // The start's way now goes around an end of the wall (past y = 1 + 0.3 m of inflation):
-    // at least twice hypot(1.5, 1.3) = 3.97 m to get level with it and beyond, more than 5 m
-    // in all; the end, behind the wall, still has its straight 3 m.
+    // The start's way now goes around an end of the wall (past y = 1 + 0.3 m of inflation)
+    // to the target at (5, 0): at least hypot(1.5, 1.3) + hypot(3.5, 1.3) = 1.98 + 3.73 =
+    // 5.72 m; the end, behind the wall, still has its straight 3 m.
     let (a, b) = (c.from_start_m.unwrap(), c.from_end_m.unwrap());
     assert!(a > 5.5, "{c:?}");
     assert!((b - 3.0).abs() < 0.15, "{c:?}");

@@ -42,7 +42,7 @@ enum Command {
     Replay(cmd::replay::ReplayArgs),
     /// Build an occupancy grid from a log that carries poses.
     Map(cmd::map::MapArgs),
-    /// Estimate a trajectory and a map from a log's scans alone (laser-only SLAM).
+    /// Estimate a trajectory and a map from a log's scans (laser-only SLAM; --motion-prior adds the log's poses).
     Slam(cmd::slam::SlamArgs),
     /// Run landmark detection and tracking over a log and report statistics.
     Landmarks(cmd::landmarks::LandmarksArgs),

@@ -75,6 +75,7 @@ fn a_recorded_exploration_of_mbicp_replays_within_five_centimetres_of_the_truth(
     );
     println!("mbicp replay: {driven:.1} m driven, ATE {ate:.3} m, final error {last:.3} m");
     assert_eq!(report["placed"], report["scans"], "{report}");
+    assert_eq!(report["motion_prior"], false, "{report}");
     assert!(last <= 0.05, "final error {last} m");
     assert!(ate <= 0.05, "ATE {ate} m");
     // The reference is the simulator's truth (the explore run's truth.tum ends at the same
@@ -99,6 +100,8 @@ fn sim_with_slam_map_maps_the_run_within_five_centimetres_of_the_truth() {
     assert!(out.join("run.mcap").exists());
     let report = json(&out.join("slam/slam.json"));
     assert_eq!(report["placed"], report["scans"], "{report}");
+    // The navigator's estimate centred the searches.
+    assert_eq!(report["motion_prior"], true, "{report}");
     let e = &report["evaluation"];
     let (ate, last) = (
         e["absolute_m"]["rmse"].as_f64().unwrap(),

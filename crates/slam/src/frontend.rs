@@ -35,12 +35,11 @@ pub struct FrontEndParams {
     pub local_shift_m: f64,
     /// ... and turned at most this from it, degrees.
     pub local_turn_deg: f64,
-    /// Half-width of a first, narrow correlative search around the constant-velocity
-    /// prediction (not a caller's: [`FrontEnd::add_scan_near`] and
-    /// [`FrontEnd::locate_near`] search their window alone), metres (0: none), tried when the
-    /// last step moved at most half of it and
-    /// turned at most half of `narrow_window_deg`; its pose is kept, without the wide search,
-    /// unless it lies on the narrow window's edge ...
+    /// Half-width of a first, narrow correlative search around the prediction, metres (0:
+    /// none): for the constant-velocity model when the last step moved at most half of it and
+    /// turned at most half of `narrow_window_deg`, and for every [`FrontEnd::add_scan_near`]
+    /// (never for [`FrontEnd::locate_near`], which searches its window alone); its pose is
+    /// kept, without the wide search, unless it lies on the narrow window's edge ...
     pub narrow_window_m: f64,
     /// ... and the narrow search's half-width in rotation, degrees.
     pub narrow_window_deg: f64,

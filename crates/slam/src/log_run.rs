@@ -59,6 +59,9 @@ pub struct SlamReport {
     pub estimated_path_length_m: f64,
     /// Share of the map's hit endpoints within one cell of an occupied cell.
     pub map_consistency_share: f64,
+    /// True when some scan's search was centred on a motion source's pose change
+    /// ([`LogRun::add_with_motion`]): the trajectory is then not the laser's alone.
+    pub motion_prior: bool,
     /// Against the log's reference poses, when every placed scan has one.
     pub evaluation: Option<Evaluation>,
     /// Loop closure, when it ran (`None`: the front end alone).
@@ -107,6 +110,8 @@ pub struct LogRun {
     started: Instant,
     /// The motion source's pose of the last placed scan ([`LogRun::add_with_motion`]).
     last_motion: Option<Pose2>,
+    /// Whether a motion source centred a search.
+    used_motion: bool,
 }
 
 impl LogRun {
@@ -126,6 +131,7 @@ impl LogRun {
             scans: 0,
             started: Instant::now(),
             last_motion: None,
+            used_motion: false,
         })
     }
 
@@ -161,7 +167,10 @@ impl LogRun {
             _ => None,
         };
         let placement = match prediction {
-            Some(p) => self.fe.add_scan_near(geometry, scan, p),
+            Some(p) => {
+                self.used_motion = true;
+                self.fe.add_scan_near(geometry, scan, p)
+            }
             None => self.fe.add_scan(geometry, scan),
         };
         self.times_ms.push(t.elapsed().as_secs_f64() * 1e3);
@@ -229,6 +238,7 @@ impl LogRun {
             skipped,
             mut times_ms,
             scans,
+            used_motion,
             ..
         } = self;
         let timestamps = fix_timestamps(&name, &mut placed);
@@ -253,6 +263,7 @@ impl LogRun {
                 .map(|w| w[0].pose.position().distance_m(&w[1].pose.position()))
                 .sum(),
             map_consistency_share: 0.0,
+            motion_prior: used_motion,
             evaluation: evaluate(&placed, loop_closure.as_ref()),
             loop_closure,
             loop_params: None,
@@ -337,33 +348,43 @@ fn evaluate(placed: &[Placed], loops: Option<&LoopReport>) -> Option<Evaluation>
 mod tests {
     use super::*;
     use scan_types::testkit::{boxed, scan_at};
+    use std::f64::consts::FRAC_PI_2;
 
-    /// The second heading placed after a scan at the centre of a 4 m square room and a second
-    /// scan there after a 90 deg turn, with `motion` poses for the two scans.
-    fn heading_after_a_quarter_turn(motion: [Option<Pose2>; 2]) -> f64 {
+    /// Scans in a 4 m square room from the true `poses`, with `motion` poses for them; the
+    /// placed poses.
+    fn placed_in_a_square_room(poses: &[Pose2], motion: &[Option<Pose2>]) -> Vec<Pose2> {
         let g = ScanGeometry::new(-120f64.to_radians(), 1f64.to_radians(), 241, 0.02, 5.6).unwrap();
         let room = boxed(-2.0, -2.0, 2.0, 2.0);
         let mut run = LogRun::new("room", g, &FrontEndParams::default()).unwrap();
-        for (k, theta) in [0.0, std::f64::consts::FRAC_PI_2].into_iter().enumerate() {
-            let scan = scan_at(&g, &room, 0.0, 0.0, theta);
-            run.add_with_motion(k + 1, &g, &scan, None, motion[k]);
+        for (k, (p, m)) in poses.iter().zip(motion).enumerate() {
+            let scan = scan_at(&g, &room, p.x_m, p.y_m, p.theta_rad);
+            run.add_with_motion(k + 1, &g, &scan, None, *m);
         }
-        assert_eq!(run.placed().len(), 2);
-        run.placed()[1].pose.theta_rad.to_degrees()
+        assert_eq!(run.placed().len(), poses.len());
+        run.placed().iter().map(|p| p.pose).collect()
     }
 
     #[test]
     fn a_motion_source_resolves_a_turn_the_laser_cannot_see() {
-        // The room looks the same after a quarter turn: from the laser alone (constant
-        // velocity: no turn) the scan stays at 0 deg.
-        let alone = heading_after_a_quarter_turn([None, None]);
-        assert!(alone.abs() < 1.0, "{alone}");
-        // A motion source that turned 90 deg between the scans, in a frame of its own.
-        let (a, b) = (
-            Pose2::new(10.0, 5.0, 0.5),
-            Pose2::new(10.0, 5.0, 0.5 + std::f64::consts::FRAC_PI_2),
-        );
-        let turned = heading_after_a_quarter_turn([Some(a), Some(b)]);
-        assert!((turned - 90.0).abs() < 1.0, "{turned}");
+        // A quarter turn in the middle of the room, then 1 m ahead (+y).
+        let truth = [
+            Pose2::new(0.0, 0.0, 0.0),
+            Pose2::new(0.0, 0.0, FRAC_PI_2),
+            Pose2::new(0.0, 1.0, FRAC_PI_2),
+        ];
+        // The room looks the same after the turn: from the laser alone (constant velocity:
+        // no turn) the second scan stays at 0 deg.
+        let alone = placed_in_a_square_room(&truth[..2], &[None, None]);
+        assert!(alone[1].theta_rad.to_degrees().abs() < 1.0, "{alone:?}");
+        // A motion source that turned and drove the same, in a frame of its own.
+        let a = Pose2::new(10.0, 5.0, 0.5);
+        let b = a.compose(&Pose2::new(0.0, 0.0, FRAC_PI_2));
+        let c = b.compose(&Pose2::new(1.0, 0.0, 0.0));
+        let placed = placed_in_a_square_room(&truth, &[Some(a), Some(b), Some(c)]);
+        for (p, t) in placed.iter().zip(&truth) {
+            assert!(p.position().distance_m(&t.position()) < 0.05, "{placed:?}");
+            let turn = (p.theta_rad - t.theta_rad).to_degrees();
+            assert!(turn.abs() < 1.0, "{placed:?}");
+        }
     }
 }

@@ -94,10 +94,10 @@ pub struct ExploreSummary {
     pub final_position_error_m: Option<f64>,
     /// RMS of the position error at every leg end, metres (simulator).
     pub ate_rmse_m: Option<f64>,
-    /// With `--slam-map` (simulator): `coverage_share` of the laser-only SLAM map, placed at
-    /// the true start.
+    /// With `--slam-map` (simulator): `coverage_share` of the SLAM map, placed at the true
+    /// start.
     pub slam_map_coverage_share: Option<f64>,
-    /// With `--slam-map` (simulator): `map_accuracy_share` of the laser-only SLAM map.
+    /// With `--slam-map` (simulator): `map_accuracy_share` of the SLAM map.
     pub slam_map_accuracy_share: Option<f64>,
     /// CPU time, seconds (the loop's own thread).
     pub cpu_time_s: f64,
@@ -220,7 +220,7 @@ pub fn run(args: ExploreArgs) -> anyhow::Result<()> {
         && let Some(grid) = super::slam::map_at_reference_start(
             &slam_run.geometry,
             &slam_run.placed,
-            config.localiser.map_resolution_m,
+            super::slam::MAP_RESOLUTION_M,
             super::slam::MAP_MAX_RANGE_M,
         )
     {

@@ -46,17 +46,17 @@ pub fn run(args: ExploreArgs, seeds: &str) -> anyhow::Result<()> {
     let out = args.options.out.clone();
     std::fs::create_dir_all(&out).with_context(|| format!("cannot create {}", out.display()))?;
     let mut runs = Vec::new();
+    let mut interrupted = false;
     for seed in range {
+        if crate::interrupt::requested() {
+            interrupted = true;
+            break;
+        }
         let mut one = args.clone();
         one.seeds = None;
         one.sim.seed = seed;
         one.options.out = out.join(format!("seed-{seed}"));
         let result = super::explore::run(one.clone());
-        if let Err(e) = &result
-            && e.downcast_ref::<crate::interrupt::Interrupted>().is_some()
-        {
-            return result;
-        }
         // A failed exploration still wrote its explore.json; anything else stops the batch.
         let summary = one.options.out.join("explore.json");
         match read_json(&summary) {
@@ -66,9 +66,14 @@ pub fn run(args: ExploreArgs, seeds: &str) -> anyhow::Result<()> {
             }
         }
         if let Err(e) = result {
+            if e.downcast_ref::<crate::interrupt::Interrupted>().is_some() {
+                interrupted = true;
+                break;
+            }
             tracing::warn!("seed {seed}: {e:#}");
         }
     }
+    // The seeds done so far are written, also after Ctrl-C.
     let aggregates = aggregate(&runs);
     let file = BatchFile {
         command: std::env::args().collect::<Vec<_>>().join(" "),
@@ -83,6 +88,9 @@ pub fn run(args: ExploreArgs, seeds: &str) -> anyhow::Result<()> {
     #[allow(clippy::print_stdout)]
     {
         println!("explore-batch.json: {}", path.display());
+    }
+    if interrupted {
+        return Err(crate::interrupt::Interrupted.into());
     }
     Ok(())
 }

@@ -1,6 +1,6 @@
 //! `robot-app slam`: a trajectory and a map from the laser alone, for any log goalseek reads.
-//! The poses and odometry a log may carry are never given to the estimator; they are only
-//! used, when present, to evaluate it. The run and its report are [`slam::LogRun`]'s; this
+//! The poses and odometry a log may carry are never given to the estimator unless
+//! `--motion-prior` asks for them; they are used, when present, to evaluate it. The run and its report are [`slam::LogRun`]'s; this
 //! command reads the log, shows progress and writes the outputs.
 
 use std::path::{Path, PathBuf};
@@ -165,6 +165,9 @@ pub fn run_log_live(
     let name = path.display().to_string();
     let mut progress = Progress::new();
     let mut run = LogRun::new(&name, *source.geometry(), params)?;
+    // The motion source is chosen once, on the first record with a pose: odometry when the
+    // log has it, else its pose; a record without that one centres nothing.
+    let mut odometry: Option<bool> = None;
     loop {
         let rec = match source.next_record() {
             Ok(r) => r,
@@ -173,18 +176,31 @@ pub fn run_log_live(
         };
         progress.tick();
         let placed = run.placed().len();
+        if motion_prior && odometry.is_none() && (rec.odom_pose.or(rec.pose)).is_some() {
+            odometry = Some(rec.odom_pose.is_some());
+        }
+        let motion = match odometry {
+            Some(true) => rec.odom_pose,
+            Some(false) => rec.pose,
+            None => None,
+        };
         // The simulator's truth, where the log has it, is the better reference.
         run.add_with_motion(
             rec.line,
             &rec.geometry,
             &rec.scan,
             rec.true_pose.or(rec.pose),
-            rec.odom_pose.or(rec.pose).filter(|_| motion_prior),
+            motion,
         );
         if let Some(v) = live.as_deref_mut() {
             let estimate = run.placed().get(placed).map(|p| p.pose);
             v.scan(&rec.geometry, &rec.scan, estimate, None);
         }
+    }
+    if motion_prior && odometry.is_none() {
+        tracing::warn!(
+            "{name}: --motion-prior: the log holds no poses; the constant-velocity model centres every search"
+        );
     }
     let run = match loops {
         Some(l) => run
