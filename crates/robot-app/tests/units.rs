@@ -446,6 +446,9 @@ mod batch {
         assert_eq!(parse_seeds("7").unwrap(), 7..8);
         assert!(parse_seeds("5..5").is_err());
         assert!(parse_seeds("a..b").is_err());
+        // The largest seed has no seed after it: refused, not wrapped.
+        let e = parse_seeds(&u64::MAX.to_string()).unwrap_err().to_string();
+        assert!(e.contains("--seeds"), "{e}");
     }
 }
 

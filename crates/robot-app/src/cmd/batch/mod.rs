@@ -88,7 +88,10 @@ pub fn parse_seeds(s: &str) -> anyhow::Result<std::ops::Range<u64>> {
         Ok(a..b)
     } else {
         let a: u64 = s.trim().parse().with_context(bad)?;
-        Ok(a..a + 1)
+        let b = a
+            .checked_add(1)
+            .with_context(|| format!("--seeds '{s}': the seed must be below {}", u64::MAX))?;
+        Ok(a..b)
     }
 }
 
