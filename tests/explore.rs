@@ -82,22 +82,29 @@ struct ExploreCli {
     args: ExploreArgs,
 }
 
-#[test]
-fn the_paper_world_is_explored_without_a_goal() {
-    let dir = tempfile::tempdir().unwrap();
-    let out = dir.path().join("out");
-    let argv: [&OsStr; 5] = [
+/// Explores the paper's world, seed 0, into `out` with the extra arguments; its `explore.json`.
+fn explore_paper_world(out: &Path, extra: &[&OsStr]) -> serde_json::Value {
+    let mut argv: Vec<&OsStr> = vec![
         "explore".as_ref(),
         "--seed".as_ref(),
         "0".as_ref(),
         "--out".as_ref(),
         out.as_os_str(),
     ];
+    argv.extend_from_slice(extra);
     let args = ExploreCli::try_parse_from(argv).unwrap().args;
     robot_app::cmd::explore::run(args).expect("the exploration ends without a failure");
-    let s: serde_json::Value =
+    let s =
         serde_json::from_str(&std::fs::read_to_string(out.join("explore.json")).unwrap()).unwrap();
     println!("{s}");
+    s
+}
+
+#[test]
+fn the_paper_world_is_explored_without_a_goal() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let s = explore_paper_world(&out, &[]);
     assert_eq!(s["end"], "explored", "{s}");
     assert_eq!(s["collisions"], 0, "{s}");
     // Every key names its unit or is a documented unitless one.
@@ -134,19 +141,7 @@ fn the_paper_world_is_explored_without_a_goal() {
 fn the_slam_map_of_an_exploration_is_scored_against_the_true_world() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("out");
-    let argv: [&OsStr; 6] = [
-        "explore".as_ref(),
-        "--seed".as_ref(),
-        "0".as_ref(),
-        "--slam-map".as_ref(),
-        "--out".as_ref(),
-        out.as_os_str(),
-    ];
-    let args = ExploreCli::try_parse_from(argv).unwrap().args;
-    robot_app::cmd::explore::run(args).expect("the exploration and its SLAM map succeed");
-    let s: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("explore.json")).unwrap()).unwrap();
-    println!("{s}");
+    let s = explore_paper_world(&out, &["--slam-map".as_ref()]);
     assert!(
         s["slam_map_coverage_share"].as_f64().unwrap() >= 0.95,
         "{s}"

@@ -228,9 +228,7 @@ pub fn run(args: ExploreArgs) -> anyhow::Result<()> {
         let summary = &mut explored.summary;
         summary.slam_map_coverage_share = coverage;
         summary.slam_map_accuracy_share = accuracy;
-        let mut text = serde_json::to_string_pretty(summary)?;
-        text.push('\n');
-        write_atomic(&args.options.out.join("explore.json"), text.as_bytes())?;
+        write_summary(&args.options.out, summary)?;
         #[allow(clippy::print_stdout)]
         {
             println!(
@@ -559,6 +557,13 @@ fn explore_robot(
     })
 }
 
+/// Writes `summary` as `explore.json` into `dir`.
+fn write_summary(dir: &std::path::Path, summary: &ExploreSummary) -> anyhow::Result<()> {
+    let mut text = serde_json::to_string_pretty(summary)?;
+    text.push('\n');
+    write_atomic(&dir.join("explore.json"), text.as_bytes())
+}
+
 /// Writes `explore.json`, `trajectory.csv`, the TUM files, the maps and the run's figure.
 fn write_outputs(
     dir: &std::path::Path,
@@ -567,9 +572,7 @@ fn write_outputs(
     world: &str,
 ) -> anyhow::Result<()> {
     std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
-    let mut text = serde_json::to_string_pretty(summary)?;
-    text.push('\n');
-    write_atomic(&dir.join("explore.json"), text.as_bytes())?;
+    write_summary(dir, summary)?;
     scan_log::write_trajectory(dir, &run.log)?;
     let grid = &run.exploration.outcome.grid;
     grid.write_map_server(dir, "map")
