@@ -1,6 +1,6 @@
 //! Laser-only SLAM front end over whole real logs (scans read beforehand): `slam/exp1` is a
-//! URG-04LX at 10 Hz (consecutive scans), `slam/intel` the subsampled Intel log (large steps,
-//! the wide window). Throughput is scans per second; the time per scan is the median divided
+//! URG-04LX at 10 Hz (consecutive scans; `slam/exp1_thinned` with `icp_target_voxel_m` 0.02),
+//! `slam/intel` the subsampled Intel log (large steps, the wide window). Throughput is scans per second; the time per scan is the median divided
 //! by the scan count printed at the start.
 //!
 //! `pose_graph/optimise_5000` optimises a synthetic 5 000-node pose graph.
@@ -30,8 +30,8 @@ fn scans(rel: &str) -> Option<Vec<(ScanGeometry, Scan)>> {
     )
 }
 
-fn placed(scans: &[(ScanGeometry, Scan)]) -> usize {
-    let mut fe = FrontEnd::new(FrontEndParams::default()).unwrap();
+fn placed(scans: &[(ScanGeometry, Scan)], params: &FrontEndParams) -> usize {
+    let mut fe = FrontEnd::new(params.clone()).unwrap();
     scans
         .iter()
         .filter(|(g, s)| matches!(fe.add_scan(g, s), Placement::Placed { .. }))
@@ -41,17 +41,30 @@ fn placed(scans: &[(ScanGeometry, Scan)]) -> usize {
 fn bench_slam(c: &mut Criterion) {
     let mut group = c.benchmark_group("slam");
     group.sample_size(10);
-    for (name, rel) in [
-        ("exp1", "breezyslam/exp1.dat"),
-        ("intel", "carmen/intel-corrected.log.gz"),
+    let thinned = FrontEndParams {
+        icp_target_voxel_m: 0.02,
+        ..FrontEndParams::default()
+    };
+    for (name, rel, params) in [
+        ("exp1", "breezyslam/exp1.dat", FrontEndParams::default()),
+        ("exp1_thinned", "breezyslam/exp1.dat", thinned),
+        (
+            "intel",
+            "carmen/intel-corrected.log.gz",
+            FrontEndParams::default(),
+        ),
     ] {
         let Some(log) = scans(rel) else {
             println!("skipping {name}: {rel} not found");
             continue;
         };
-        println!("{name}: {} scans, {} placed", log.len(), placed(&log));
+        println!(
+            "{name}: {} scans, {} placed",
+            log.len(),
+            placed(&log, &params)
+        );
         group.throughput(Throughput::Elements(log.len() as u64));
-        group.bench_function(name, |b| b.iter(|| black_box(placed(&log))));
+        group.bench_function(name, |b| b.iter(|| black_box(placed(&log, &params))));
     }
     group.finish();
 }

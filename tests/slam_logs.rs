@@ -53,6 +53,23 @@ fn intel_every_scan_placed_within_the_relation_bar() {
     assert_eq!(r.timestamps, "scan_index");
 }
 
+/// The thinned refinement submap (`icp_target_voxel_m`) keeps the Intel front end within the
+/// same bar, from the reference poses.
+#[test]
+fn a_thinned_submap_keeps_the_intel_relation_bar() {
+    let Some(p) = shared("carmen/intel-corrected.log.gz") else {
+        return;
+    };
+    let (mut front, _) = load_params(None).unwrap();
+    front.icp_target_voxel_m = 0.02;
+    let run = run_log(&p, &front, None).unwrap();
+    let r = &run.report;
+    assert_eq!((r.scans, r.placed), (910, 910), "{:?}", r.skipped);
+    let e = r.evaluation.as_ref().expect("the corrected log has poses");
+    assert!(e.relative_1.translation_m.mean <= 0.04, "{e:?}");
+    assert!(e.relative_1.rotation_deg.mean <= 1.0, "{e:?}");
+}
+
 /// Every scan of the other real logs is placed (scan counts from the MANIFEST); the figures
 /// are printed for docs/slam.md.
 #[test]

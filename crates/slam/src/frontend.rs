@@ -82,6 +82,9 @@ pub struct FrontEndParams {
     pub max_refine_loss: f64,
     /// The refinement fits every this-many-th hit of the scan (1: all).
     pub icp_stride: usize,
+    /// The refinement's submap keeps one point per square of this size and normal
+    /// direction, the newest keyframe's (0: every point of every keyframe), metres.
+    pub icp_target_voxel_m: f64,
 }
 
 impl Default for FrontEndParams {
@@ -114,6 +117,7 @@ impl Default for FrontEndParams {
             icp_surface_spacings: 3.0,
             max_refine_loss: 0.05,
             icp_stride: 2,
+            icp_target_voxel_m: 0.0,
         }
     }
 }
@@ -147,6 +151,7 @@ impl FrontEndParams {
                 ("local_turn_deg", self.local_turn_deg),
                 ("narrow_window_m", self.narrow_window_m),
                 ("narrow_window_deg", self.narrow_window_deg),
+                ("icp_target_voxel_m", self.icp_target_voxel_m),
             ],
             |v| v.is_finite() && v >= 0.0,
             "must be a number >= 0",
@@ -565,11 +570,12 @@ impl FrontEnd {
         self.grid = ScoreGrid::new(&all, p.resolution_m, p.smoothing_m, p.depth, window_cells);
         if p.refine {
             self.target = MatchTarget::new();
-            for k in &self.keyframes {
+            for k in self.keyframes.iter().rev() {
                 if let Some(t) = &k.target {
                     self.target.add_target(&k.pose, t);
                 }
             }
+            self.target.thin(p.icp_target_voxel_m);
         }
     }
 }

@@ -82,6 +82,28 @@ impl MatchTarget {
         self.push_moved(pose, other.points.iter().copied());
     }
 
+    /// Keeps one point per `cell_m` square and normal direction (within 45 deg): the first
+    /// added, so a caller that adds its most trusted scans first keeps theirs. Overlapping
+    /// scans of one wall otherwise stack many points per centimetre of it.
+    pub fn thin(&mut self, cell_m: f64) {
+        if !(cell_m > 0.0 && cell_m.is_finite()) {
+            return;
+        }
+        let mut seen = std::collections::HashSet::new();
+        self.points.retain(|o| {
+            if !is_finite2(o.p) {
+                return false;
+            }
+            let octant = (o.n[1].atan2(o.n[0]) / std::f64::consts::FRAC_PI_4).floor() as i64;
+            seen.insert((
+                (o.p[0] / cell_m).floor() as i64,
+                (o.p[1] / cell_m).floor() as i64,
+                octant,
+            ))
+        });
+        self.dirty = true;
+    }
+
     fn push_moved(&mut self, pose: &Pose2, points: impl IntoIterator<Item = Oriented>) {
         let (s, c) = pose.theta_rad.sin_cos();
         for o in points {
@@ -162,7 +184,8 @@ impl MatchTarget {
     ///
     /// First searches the cells within `min(gate, NEAR_M, distance to the hint)` of `q`: a
     /// point found there nearer than that radius is the nearest overall (every point
-    /// outside those cells lies farther away). Otherwise searches every cell within `gate`.
+    /// outside those cells lies farther away). Otherwise the radius doubles (at least one
+    /// cell) until such a point is found or the radius reaches `gate`.
     pub(super) fn nearest_hinted(
         &self,
         q: [f64; 2],
@@ -182,16 +205,23 @@ impl MatchTarget {
                 near = near.min(d2.sqrt() + 2e-9);
             }
         }
-        if let Some((d2, k)) = self.nearest_in(q, n, near, gate, min_cos) {
+        // Rings of doubling reach: most points lie a few centimetres from their match, and
+        // a wide gate's whole square holds many keyframes' hits of the same wall.
+        let mut reach = near;
+        loop {
+            let found = self.nearest_in(q, n, reach, gate, min_cos);
+            if reach >= gate {
+                return found.map(|(_, k)| k);
+            }
             // Margin for the rounding of cell assignment.
-            let sure = (near - 1e-9).max(0.0);
-            if d2 < sure * sure || near >= gate {
+            let sure = (reach - 1e-9).max(0.0);
+            if let Some((d2, k)) = found
+                && d2 < sure * sure
+            {
                 return Some(k);
             }
-        } else if near >= gate {
-            return None;
+            reach = (2.0 * reach).max(CELL_M).min(gate);
         }
-        self.nearest_in(q, n, gate, gate, min_cos).map(|(_, k)| k)
     }
 
     /// The nearest point within `gate` (squared distance and index into `sorted`) among the
@@ -318,6 +348,46 @@ mod tests {
             t.nearest_hinted([f64::NAN, 0.0], [1.0, 0.0], 0.3, 0.5, Some(0)),
             None
         );
+    }
+
+    #[test]
+    fn thinning_keeps_one_point_per_cell_and_side_of_a_wall() {
+        // Both faces of a 1 m wall along y = 0.01, hits every 5 mm: 200 points a face.
+        let mut t = MatchTarget::new();
+        for side in [1.0, -1.0] {
+            for k in 0..200 {
+                t.points.push(Oriented {
+                    p: [0.0025 + k as f64 * 0.005, 0.01],
+                    n: [0.0, side],
+                });
+            }
+        }
+        t.points.push(Oriented {
+            p: [f64::NAN, 0.0],
+            n: [1.0, 0.0],
+        });
+        t.thin(0.02);
+        // 1 m / 0.02 m = 50 cells a face; the first point of each cell is kept.
+        assert_eq!(t.len(), 100);
+        assert!(
+            (t.points[1].p[0] - 0.0225).abs() < 1e-12,
+            "{:?}",
+            t.points[1]
+        );
+        assert_eq!(t.points.iter().filter(|o| o.n[1] < 0.0).count(), 50);
+        // A thinned target still finds the wall's point nearest a query.
+        t.index();
+        let k = t
+            .nearest_hinted([0.5, 0.0], [0.0, 1.0], 0.06, 0.5, None)
+            .unwrap();
+        assert!(
+            (t.sorted[k].p[0] - 0.5025).abs() < 1e-12,
+            "{:?}",
+            t.sorted[k]
+        );
+        let before = t.len();
+        t.thin(0.0);
+        assert_eq!(t.len(), before);
     }
 
     #[test]
