@@ -201,7 +201,7 @@ fn assert_no_partial_files(dir: &Path) {
 }
 
 #[test]
-fn no_fault_reaches_the_goal() {
+fn no_fault_reaches_the_goal_and_maps_the_run() {
     let mut h = Harness::start(BaseGains::default(), &[]);
     h.drive(|_, _| {});
     let end = h.finish();
@@ -213,6 +213,39 @@ fn no_fault_reaches_the_goal() {
         end.true_distance_m
     );
     end.assert_clean_end();
+    // `run` maps by default: every scan the run read is recorded and placed.
+    let run = end.dir.path().join("run");
+    let report: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(run.join("slam/slam.json")).unwrap()).unwrap();
+    assert_eq!(report["scans"].as_u64(), Some(recorded_scans(&run)));
+    assert_eq!(report["placed"], report["scans"]);
+    assert!(
+        run.join("slam/map.pgm")
+            .metadata()
+            .is_ok_and(|m| m.len() > 0)
+    );
+}
+
+#[test]
+fn no_slam_map_records_and_maps_nothing() {
+    let mut h = Harness::start(BaseGains::default(), &["--no-slam-map"]);
+    h.drive(|_, _| {});
+    let end = h.finish();
+    assert!(end.status.success(), "stderr:\n{}", end.stderr);
+    let run = end.dir.path().join("run");
+    assert!(run.join("summary.json").exists());
+    assert!(!run.join("run.mcap").exists());
+    assert!(!run.join("slam").exists());
+}
+
+/// The number of scans in the run's recording `run/run.mcap`.
+fn recorded_scans(run: &Path) -> u64 {
+    let mut log = scan_log::open_log(&run.join("run.mcap"), None).expect("the recording opens");
+    let mut scans = 0u64;
+    while scan_types::LaserSource::next_scan(&mut log).is_ok() {
+        scans += 1;
+    }
+    scans
 }
 
 #[test]
@@ -340,8 +373,8 @@ fn sigint_stops_the_base_writes_everything_and_exits_130() {
 }
 
 #[test]
-fn ctrl_c_with_slam_map_still_maps_the_run_from_its_scans() {
-    let mut h = Harness::start(BaseGains::default(), &["--slam-map"]);
+fn ctrl_c_still_maps_the_run_from_its_scans() {
+    let mut h = Harness::start(BaseGains::default(), &[]);
     let pid = nix::unistd::Pid::from_raw(i32::try_from(h.child.id()).unwrap());
     // Where the simulated robot stood before each motion command, in the frame of its start
     // (the first scan's): the run scans only between moves.
@@ -360,11 +393,7 @@ fn ctrl_c_with_slam_map_still_maps_the_run_from_its_scans() {
     end.assert_clean_end();
     let run = end.dir.path().join("run");
     // Every scan the run read is in its recording, and every one of them was mapped.
-    let mut log = scan_log::open_log(&run.join("run.mcap"), None).expect("the recording opens");
-    let mut scans = 0u64;
-    while scan_types::LaserSource::next_scan(&mut log).is_ok() {
-        scans += 1;
-    }
+    let scans = recorded_scans(&run);
     let slam = run.join("slam");
     let report: serde_json::Value =
         serde_json::from_slice(&std::fs::read(slam.join("slam.json")).unwrap()).unwrap();

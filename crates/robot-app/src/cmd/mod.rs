@@ -44,7 +44,8 @@ pub struct LoopOptions {
     pub profile: crate::record::RecordProfile,
     /// After the run, map it with SLAM (as `robot-app slam --motion-prior`: loop closure on,
     /// each scan's search centred on the robot's own estimate) from every scan it read, into
-    /// OUT/slam/; records to OUT/run.mcap unless --record is given.
+    /// OUT/slam/; records to OUT/run.mcap unless --record is given (`run` does this by
+    /// default).
     #[arg(long)]
     pub slam_map: bool,
 }

@@ -25,6 +25,10 @@ pub struct RunArgs {
     /// Start pose X,Y,THETA_DEG: where the map's frame puts the robot (default 0,0,0).
     #[arg(long, value_name = "X,Y,THETA_DEG", allow_hyphen_values = true)]
     pub start: Option<String>,
+    /// Do not map the run with SLAM when it ends (by default `run` records every scan to
+    /// OUT/run.mcap, or --record's file, and maps it into OUT/slam/, as --slam-map does).
+    #[arg(long, conflicts_with = "slam_map")]
+    pub no_slam_map: bool,
     /// Configuration, output folder, recording.
     #[command(flatten)]
     pub options: super::LoopOptions,
@@ -45,7 +49,9 @@ pub fn open_base(spec: &str) -> anyhow::Result<robot_base::DynBase> {
 }
 
 /// Runs `robot-app run`.
-pub fn run(args: RunArgs) -> anyhow::Result<()> {
+pub fn run(mut args: RunArgs) -> anyhow::Result<()> {
+    // On a real robot the building's map is the point of the run: mapped unless refused.
+    args.options.slam_map = !args.no_slam_map;
     let config = args.options.prepare()?;
     let goal = scan_types::parse_point(&args.goal).context("--goal")?;
     let start = match &args.start {
