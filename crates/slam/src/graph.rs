@@ -26,6 +26,17 @@ pub struct Edge {
     pub robust: bool,
 }
 
+/// A robust edge removed as an outlier by [`PoseGraph::drop_outliers`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Dropped {
+    /// Its index among the graph's robust edges, in the order they were added.
+    pub robust_index: usize,
+    /// Its weight under the loss when it was removed.
+    pub weight: f64,
+    /// Its whitened residual then (x, y, heading).
+    pub residual_sigmas: [f64; 3],
+}
+
 /// Tuning of [`PoseGraph::optimise`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct OptimiseParams {
@@ -149,6 +160,52 @@ impl PoseGraph {
             iterations,
             cost: [before, self.cost(params)],
         })
+    }
+
+    /// Removes the robust edges that the loss weighs below `reject_weight` at the current
+    /// poses and optimises again, until none is left below it: an outlier weighed down still
+    /// pulls. Returns each removed edge's index among the robust edges as they were before,
+    /// with its weight and residual when it was removed, and the optimisations run.
+    pub fn drop_outliers(
+        &mut self,
+        params: &OptimiseParams,
+        reject_weight: f64,
+    ) -> Result<(Vec<Dropped>, usize), SlamError> {
+        // Each robust edge still in the graph, by its index among the robust edges.
+        let mut robust: Vec<usize> = (0..self.edges.iter().filter(|e| e.robust).count()).collect();
+        let (mut dropped, mut optimisations) = (Vec::new(), 0);
+        loop {
+            let mut out = Vec::new();
+            for (k, e) in self.edges.iter().filter(|e| e.robust).enumerate() {
+                let weight = self.weight(e, params);
+                if weight < reject_weight {
+                    out.push(k);
+                    dropped.push(Dropped {
+                        robust_index: robust[k],
+                        weight,
+                        residual_sigmas: self.residual(e),
+                    });
+                }
+            }
+            if out.is_empty() {
+                return Ok((dropped, optimisations));
+            }
+            let mut k = 0;
+            self.edges.retain(|e| {
+                if !e.robust {
+                    return true;
+                }
+                k += 1;
+                !out.contains(&(k - 1))
+            });
+            let mut k = 0;
+            robust.retain(|_| {
+                k += 1;
+                !out.contains(&(k - 1))
+            });
+            self.optimise(params)?;
+            optimisations += 1;
+        }
     }
 
     /// Sum over edges of weight times squared whitened residual.
@@ -411,6 +468,15 @@ mod tests {
         assert!(worst(&g) < 0.005, "{}", worst(&g));
         let false_edge = g.edges.last().unwrap();
         assert!(g.weight(false_edge, &params) < 0.002);
+        // Dropped as an outlier, it pulls no longer: the poses are those of the graph
+        // without it, which are the truth (every other edge is exact).
+        let (dropped, optimisations) = g.drop_outliers(&params, 0.3).unwrap();
+        assert_eq!(optimisations, 1);
+        assert_eq!(dropped.len(), 1);
+        assert_eq!(dropped[0].robust_index, 4);
+        assert!(dropped[0].weight < 0.002, "{dropped:?}");
+        assert_eq!(g.edges.iter().filter(|e| e.robust).count(), 4);
+        assert!(worst(&g) < 1e-6, "{}", worst(&g));
     }
 
     #[test]

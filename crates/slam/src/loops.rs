@@ -190,9 +190,10 @@ pub struct Closure {
     pub data_heading_sigma_deg: Option<f64>,
     /// Worst position standard deviation from the ICP refinement's data alone, metres.
     pub data_worst_sigma_m: Option<f64>,
-    /// Its residual against the optimised graph, in standard deviations (x, y, heading).
+    /// Its residual against the optimised graph, in standard deviations (x, y, heading); for
+    /// a rejected closure, against the graph it was dropped from.
     pub residual_sigmas: [f64; 3],
-    /// Its weight under the loss in the optimised graph.
+    /// Its weight under the loss in the optimised graph (a rejected one: when dropped).
     pub weight: f64,
 }
 
@@ -321,11 +322,24 @@ pub fn close_loops(
     }
     graph.optimise(&optimise)?;
     report.optimisations += 1;
-    let robust = graph.edges.iter().filter(|e| e.robust);
-    for (c, e) in report.closures.iter_mut().zip(robust) {
-        c.weight = graph.weight(e, &optimise);
-        c.residual_sigmas = graph.residual(e);
-        c.accepted = c.weight >= params.reject_weight;
+    // An outlier weighed down still pulls: it leaves the graph, which is solved again.
+    let (dropped, optimisations) = graph.drop_outliers(&optimise, params.reject_weight)?;
+    report.optimisations += optimisations;
+    let mut out = vec![None; report.closures.len()];
+    for d in dropped {
+        out[d.robust_index] = Some(d);
+    }
+    let mut kept = graph.edges.iter().filter(|e| e.robust);
+    for (c, out) in report.closures.iter_mut().zip(out) {
+        (c.weight, c.residual_sigmas, c.accepted) = match out {
+            Some(d) => (d.weight, d.residual_sigmas, false),
+            None => {
+                let e = kept
+                    .next()
+                    .expect("every closure not dropped is in the graph");
+                (graph.weight(e, &optimise), graph.residual(e), true)
+            }
+        };
     }
     report.found = report.closures.len();
     report.accepted = report.closures.iter().filter(|c| c.accepted).count();
