@@ -1,7 +1,7 @@
 //! Laser-only SLAM front end over whole real logs (scans read beforehand): `slam/exp1` is a
 //! URG-04LX at 10 Hz (consecutive scans; `slam/exp1_thinned` with `icp_target_voxel_m` 0.02),
-//! `slam/intel` the subsampled Intel log (large steps, the wide window). Throughput is scans per second; the time per scan is the median divided
-//! by the scan count printed at the start.
+//! `slam/intel` the subsampled Intel log (large steps, the wide window). Throughput is scans
+//! per second; the time per scan is the median divided by the scan count printed at the start.
 //!
 //! `pose_graph/optimise_5000` optimises a synthetic 5 000-node pose graph.
 //!

@@ -232,6 +232,7 @@ fn no_slam_map_records_and_maps_nothing() {
     h.drive(|_, _| {});
     let end = h.finish();
     assert!(end.status.success(), "stderr:\n{}", end.stderr);
+    end.assert_clean_end();
     let run = end.dir.path().join("run");
     assert!(run.join("summary.json").exists());
     assert!(!run.join("run.mcap").exists());

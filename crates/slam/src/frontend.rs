@@ -182,6 +182,13 @@ impl FrontEndParams {
         if self.depth > 10 {
             return Err(bad("depth", self.depth as f64, "must be at most 10"));
         }
+        if self.icp_target_voxel_m != 0.0 && self.icp_target_voxel_m < 0.001 {
+            return Err(bad(
+                "icp_target_voxel_m",
+                self.icp_target_voxel_m,
+                "must be 0 (off) or at least 0.001",
+            ));
+        }
         if self.icp_stride == 0 {
             return Err(bad("icp_stride", 0.0, "must be at least 1"));
         }
@@ -602,4 +609,37 @@ pub(crate) fn thin_hits(
         }
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn out_of_range_values_are_refused_by_name() {
+        let with = |voxel: f64| {
+            FrontEndParams {
+                icp_target_voxel_m: voxel,
+                ..FrontEndParams::default()
+            }
+            .validate()
+        };
+        assert!(with(0.0).is_ok());
+        assert!(with(0.02).is_ok());
+        for bad in [-0.01, 1e-310, 0.0005, f64::NAN, f64::INFINITY] {
+            let e = with(bad).expect_err("refused").to_string();
+            assert!(e.contains("icp_target_voxel_m"), "{bad}: {e}");
+        }
+        let stride = FrontEndParams {
+            icp_stride: 0,
+            ..FrontEndParams::default()
+        };
+        assert!(
+            stride
+                .validate()
+                .unwrap_err()
+                .to_string()
+                .contains("icp_stride")
+        );
+    }
 }

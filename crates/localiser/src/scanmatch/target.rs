@@ -82,7 +82,7 @@ impl MatchTarget {
         self.push_moved(pose, other.points.iter().copied());
     }
 
-    /// Keeps one point per `cell_m` square and normal direction (within 45 deg): the first
+    /// Keeps one point per `cell_m` square and 45 deg sector of normal direction: the first
     /// added, so a caller that adds its most trusted scans first keeps theirs. Overlapping
     /// scans of one wall otherwise stack many points per centimetre of it.
     pub fn thin(&mut self, cell_m: f64) {
@@ -94,7 +94,11 @@ impl MatchTarget {
             if !is_finite2(o.p) {
                 return false;
             }
-            let octant = (o.n[1].atan2(o.n[0]) / std::f64::consts::FRAC_PI_4).floor() as i64;
+            // Sectors -4..3: +180 deg is -180 deg.
+            let octant = match (o.n[1].atan2(o.n[0]) / std::f64::consts::FRAC_PI_4).floor() as i64 {
+                4 => -4,
+                k => k,
+            };
             seen.insert((
                 (o.p[0] / cell_m).floor() as i64,
                 (o.p[1] / cell_m).floor() as i64,
@@ -208,9 +212,18 @@ impl MatchTarget {
         // Rings of doubling reach: most points lie a few centimetres from their match, and
         // a wide gate's whole square holds many keyframes' hits of the same wall.
         let mut reach = near;
+        // Beyond this reach the search already covers every cell.
+        let whole = [0, 1]
+            .iter()
+            .map(|&a| {
+                let cells = if a == 0 { self.width } else { self.height };
+                let lo = q[a] - self.origin[a];
+                lo.abs().max((cells as f64 * CELL_M - lo).abs()) + CELL_M
+            })
+            .fold(0.0, f64::max);
         loop {
             let found = self.nearest_in(q, n, reach, gate, min_cos);
-            if reach >= gate {
+            if reach >= gate || reach >= whole {
                 return found.map(|(_, k)| k);
             }
             // Margin for the rounding of cell assignment.
@@ -323,7 +336,7 @@ mod tests {
             let q = [uniform() * 4.0 - 2.0, uniform() * 4.0 - 2.0];
             let a = uniform() * std::f64::consts::TAU;
             let n = [a.cos(), a.sin()];
-            for gate in [0.01, 0.05, 0.06, 0.12, 0.3, 1.0] {
+            for gate in [0.0, 0.01, 0.05, 0.06, 0.12, 0.3, 1.0, 10.0, f64::INFINITY] {
                 // Brute force: the first point of least squared distance within the gate.
                 let mut want: Option<(f64, &Oriented)> = None;
                 for o in &t.points {

@@ -110,18 +110,18 @@ impl LoopOptions {
                 tracing::info!(
                     placed = run.report.placed,
                     scans = run.report.scans,
-                    "--slam-map: map and trajectory in {}",
+                    "SLAM map and trajectory in {}",
                     self.out.join("slam").display()
                 );
                 Ok(Some(run))
             }
             Ok(None) => {
-                tracing::warn!("--slam-map: {} holds no scan to map", path.display());
+                tracing::warn!("SLAM map: {} holds no scan to map", path.display());
                 Ok(None)
             }
             Err(e) => {
-                tracing::error!("--slam-map: {e:#}");
-                Err(e.context("--slam-map"))
+                tracing::error!("SLAM map: {e:#}");
+                Err(e.context("SLAM map"))
             }
         }
     }

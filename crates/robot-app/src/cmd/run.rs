@@ -50,7 +50,9 @@ pub fn open_base(spec: &str) -> anyhow::Result<robot_base::DynBase> {
 
 /// Runs `robot-app run`.
 pub fn run(mut args: RunArgs) -> anyhow::Result<()> {
-    // On a real robot the building's map is the point of the run: mapped unless refused.
+    // On a real robot the building's map is the point of the run: mapped unless refused. A
+    // failure of the map asked for by default is logged, not the run's exit status.
+    let asked_for_map = args.options.slam_map;
     args.options.slam_map = !args.no_slam_map;
     let config = args.options.prepare()?;
     let goal = scan_types::parse_point(&args.goal).context("--goal")?;
@@ -136,7 +138,13 @@ pub fn run(mut args: RunArgs) -> anyhow::Result<()> {
         args.options.out.display()
     );
     // What was recorded is mapped even when the recording broke off.
-    let mapped = args.options.write_slam_map().map(|_| ());
+    let mapped = match args.options.write_slam_map() {
+        Err(e) if !asked_for_map => {
+            tracing::warn!("the run's SLAM map was not written: {e:#}");
+            Ok(())
+        }
+        other => other.map(|_| ()),
+    };
     if let Some(e) = record_error {
         bail!("recording failed: {e}");
     }
