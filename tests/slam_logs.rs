@@ -118,6 +118,17 @@ fn aces_and_breezyslam_every_scan_placed() {
         ] {
             assert!(dir.path().join(f).exists(), "{rel}: {f}");
         }
+        // map.png is the map (as large as map.pgm) with the trajectory and the closures drawn
+        // on it: blue, green for accepted, red for rejected (docs/outputs.md).
+        let png = image::open(dir.path().join("map.png")).unwrap().to_rgb8();
+        let pgm = image::open(dir.path().join("map.pgm")).unwrap();
+        assert_eq!(png.dimensions(), (pgm.width(), pgm.height()), "{rel}");
+        let count = |rgb: [u8; 3]| png.pixels().filter(|p| p.0 == rgb).count();
+        assert!(count([0, 90, 255]) > 100, "{rel}: no trajectory on map.png");
+        if let Some(l) = &r.loop_closure {
+            assert_eq!(count([0, 170, 0]) > 0, l.accepted > 0, "{rel}");
+            assert_eq!(count([220, 0, 0]) > 0, l.rejected > 0, "{rel}");
+        }
         // slam.json names the path it measures and its units; a closure's measured pose is
         // `{x_m, y_m, heading_deg}`.
         let text = std::fs::read_to_string(dir.path().join("slam.json")).unwrap();

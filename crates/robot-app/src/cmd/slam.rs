@@ -9,8 +9,9 @@ use std::time::{Duration, Instant};
 use anyhow::Context;
 use clap::Args;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use plotters::prelude::{BitMapBackend, IntoDrawingArea, PathElement, RGBColor};
 use scan_log::{LogOptions, LogSource};
-use scan_types::{LaserSource, ScanGeometry};
+use scan_types::{LaserSource, Pose2, ScanGeometry, WorldPoint};
 
 use slam::{FrontEndParams, LogRun, LoopParams, SlamRun};
 
@@ -234,10 +235,88 @@ pub fn write_outputs(
     }
     let grid = run.map(resolution_m, max_range_m);
     grid.write_map_server(dir, "map")?;
-    grid.to_png(&dir.join("map.png"))?;
+    let closures = run
+        .report
+        .loop_closure
+        .as_ref()
+        .map_or(&[][..], |l| &l.closures[..]);
+    let poses: Vec<Pose2> = run.placed.iter().map(|p| p.pose).collect();
+    let png = map_png(
+        &Raster {
+            pixels: grid.to_pixels(),
+            width: grid.width(),
+            height: grid.height(),
+            origin: grid.origin(),
+            resolution_m: grid.resolution_m(),
+        },
+        &poses,
+        closures,
+    )?;
+    write_atomic(&dir.join("map.png"), &png)?;
     let mut text = serde_json::to_string_pretty(&run.report)?;
     text.push('\n');
     write_atomic(&dir.join("slam.json"), text.as_bytes())
+}
+
+/// A greyscale map image (row 0 at the top) and where it lies.
+struct Raster {
+    pixels: Vec<u8>,
+    width: usize,
+    height: usize,
+    /// World position of the lower-left corner of the bottom-left pixel.
+    origin: WorldPoint,
+    resolution_m: f64,
+}
+
+/// Trajectory colour on `map.png`.
+const TRAJECTORY_RGB: RGBColor = RGBColor(0, 90, 255);
+/// Accepted loop closures on `map.png`.
+const ACCEPTED_RGB: RGBColor = RGBColor(0, 170, 0);
+/// Rejected loop closures on `map.png`.
+const REJECTED_RGB: RGBColor = RGBColor(220, 0, 0);
+
+/// `map.png`: the map with the trajectory through `poses` (blue) and each loop closure as a
+/// line between its two scans (green accepted, red rejected).
+fn map_png(map: &Raster, poses: &[Pose2], closures: &[slam::Closure]) -> anyhow::Result<Vec<u8>> {
+    let (w, h) = (map.width as u32, map.height as u32);
+    let mut buf: Vec<u8> = map.pixels.iter().flat_map(|&v| [v, v, v]).collect();
+    anyhow::ensure!(
+        buf.len() == 3 * map.width * map.height && w > 0 && h > 0,
+        "map.png: an empty map or one of the wrong size"
+    );
+    // Pixel coordinates of a world point: x to the right, y down from the top row.
+    let px = |p: &Pose2| {
+        (
+            ((p.x_m - map.origin.x_m()) / map.resolution_m).floor() as i32,
+            (map.height as f64 - (p.y_m - map.origin.y_m()) / map.resolution_m).floor() as i32,
+        )
+    };
+    {
+        let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
+        let draw = |points: Vec<(i32, i32)>, colour: &RGBColor| {
+            root.draw(&PathElement::new(points, colour))
+                .map_err(|e| anyhow::anyhow!("drawing map.png: {e}"))
+        };
+        draw(poses.iter().map(px).collect(), &TRAJECTORY_RGB)?;
+        for c in closures {
+            let (Some(a), Some(b)) = (poses.get(c.from), poses.get(c.to)) else {
+                continue;
+            };
+            let colour = if c.accepted {
+                &ACCEPTED_RGB
+            } else {
+                &REJECTED_RGB
+            };
+            draw(vec![px(a), px(b)], colour)?;
+        }
+        root.present()
+            .map_err(|e| anyhow::anyhow!("drawing map.png: {e:?}"))?;
+    }
+    let img = image::RgbImage::from_raw(w, h, buf).context("map.png: wrong buffer size")?;
+    let mut png = Vec::new();
+    img.write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
+        .context("encoding map.png")?;
+    Ok(png)
 }
 
 /// The map of `placed` scans in the frame of their reference poses, placed by the first
@@ -317,8 +396,67 @@ pub fn run(args: SlamArgs) -> anyhow::Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use localiser::CellState;
-    use scan_types::{Pose2, Scan, WorldPoint};
+    use localiser::{CellState, pixel};
+    use scan_types::Scan;
+
+    #[test]
+    fn map_png_draws_the_trajectory_and_the_closures_where_they_are() {
+        // A 40 x 20 pixel map of 0.05 m cells from (0, 0): the pixel of world (x, y) is
+        // column x / 0.05, row 20 - y / 0.05 from the top.
+        let map = Raster {
+            pixels: vec![pixel::FREE; 40 * 20],
+            width: 40,
+            height: 20,
+            origin: WorldPoint::new(0.0, 0.0),
+            resolution_m: 0.05,
+        };
+        let poses = [
+            Pose2::new(0.125, 0.125, 0.0),
+            Pose2::new(1.875, 0.125, 0.0),
+            Pose2::new(0.525, 0.525, 0.0),
+            Pose2::new(1.525, 0.525, 0.0),
+            Pose2::new(0.525, 0.825, 0.0),
+            Pose2::new(1.525, 0.825, 0.0),
+        ];
+        let closure = |from, to, accepted| slam::Closure {
+            from,
+            to,
+            quality: 1.0,
+            measured: [0.0; 3],
+            accepted,
+            heading_sigma_deg: 1.0,
+            data_heading_sigma_deg: None,
+            data_worst_sigma_m: None,
+            residual_sigmas: [0.0; 3],
+            weight: 1.0,
+        };
+        let closures = [
+            closure(2, 3, true),
+            closure(4, 5, false),
+            closure(0, 99, true),
+        ];
+        let png = map_png(&map, &poses, &closures).unwrap();
+        let img = image::load_from_memory(&png).unwrap().to_rgb8();
+        assert_eq!(img.dimensions(), (40, 20));
+        let at = |col, row| img.get_pixel(col, row).0;
+        // The first leg of the trajectory runs along y = 0.125 m (row 17), x 0.125-1.875 m.
+        assert_eq!(at(20, 17), [0, 90, 255]);
+        // The accepted closure along y = 0.525 m (row 9), x 0.525-1.525 m (columns 10-30).
+        assert_eq!(at(20, 9), [0, 170, 0]);
+        // The rejected one along y = 0.825 m (row 3).
+        assert_eq!(at(20, 3), [220, 0, 0]);
+        // Beyond a closure's end, and away from every line, the map is as it was.
+        assert_eq!(at(35, 9), [pixel::FREE; 3]);
+        assert_eq!(at(20, 15), [pixel::FREE; 3]);
+        // An empty map is an error, not a panic.
+        let empty = Raster {
+            pixels: Vec::new(),
+            width: 0,
+            height: 0,
+            ..map
+        };
+        assert!(map_png(&empty, &poses, &closures).is_err());
+    }
 
     #[test]
     fn the_map_is_placed_by_the_first_scans_reference_pose() {
