@@ -54,10 +54,14 @@ def main():
     a = ap.parse_args()
     floor.ZS[:] = [-1.0, 0.0, 1.0]
     scans = floor.read_flaser(floor.LOGS[a.log])
+    for f in ("trajectory.tum", "reference.tum"):
+        if not (a.slam_dir / f).exists():
+            sys.exit(f"{a.slam_dir / f} not found: run robot-app slam on the log first")
     est = tum(a.slam_dir / "trajectory.tum")
     ref = tum(a.slam_dir / "reference.tum")
     if len(est) != len(scans) or len(ref) != len(scans):
-        sys.exit(f"{len(scans)} scans in the log, {len(est)} placed: every scan must be placed")
+        sys.exit(f"{len(scans)} scans in the log, {len(est)} in trajectory.tum and {len(ref)} "
+                 f"in reference.tum: every scan must be placed")
     crit = REG.ICPConvergenceCriteria(1e-8, 1e-8, 100)
     method = REG.TransformationEstimationPointToPlane()
     rows = []
@@ -69,10 +73,13 @@ def main():
         tgt = floor.cloud(floor.pts2d(scans[k][0], 180.0), "2d")
         src = floor.cloud(floor.pts2d(scans[k + 1][0], 180.0), "none")
         res = REG.registration_icp(src, tgt, a.dist, init, method, crit)
-        if res.fitness < a.min_fit:
+        T = np.asarray(res.transformation)
+        if not np.all(np.isfinite(T)) or res.fitness < a.min_fit:
             continue
-        e = np.linalg.inv(r) @ floor.se2(floor.to_se2(np.asarray(res.transformation)))
+        e = np.linalg.inv(r) @ floor.se2(floor.to_se2(T))
         rows.append((math.hypot(e[0, 2], e[1, 2]), step_error(est, ref, k), k))
+    if not rows:
+        sys.exit("Open3D paired no relation; try a lower --min-fit")
     o, s = np.array([x[0] for x in rows]), np.array([x[1] for x in rows])
     print(f"open3d {o3d.__version__}; {a.log}: {len(rows)} of {len(scans) - 1} relations "
           f"paired (fitness >= {a.min_fit}), Open3D started from the {a.start}'s relative "
@@ -84,7 +91,7 @@ def main():
         if m.any():
             print(f"{lo:5.2f}-{hi:<5.2f} m    {m.sum():9d}  {s[m].mean():9.4f}  {o[m].mean():11.4f}")
     worst = sorted((x for x in rows if x[0] < 0.1), key=lambda x: -x[1])[:8]
-    print("largest slam errors where open3d lands within 0.1 m (k: slam, open3d):",
+    print("largest slam errors where open3d lands within 0.1 m (relation k -> k+1: slam, open3d):",
           ", ".join(f"{k}: {sv:.3f}, {ov:.3f}" for ov, sv, k in worst))
 
 

@@ -9,7 +9,6 @@ use std::time::{Duration, Instant};
 use anyhow::Context;
 use clap::Args;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
-use plotters::prelude::{BitMapBackend, IntoDrawingArea, PathElement, RGBColor};
 use scan_log::{LogOptions, LogSource};
 use scan_types::{LaserSource, Pose2, ScanGeometry, WorldPoint};
 
@@ -269,54 +268,109 @@ struct Raster {
 }
 
 /// Trajectory colour on `map.png`.
-const TRAJECTORY_RGB: RGBColor = RGBColor(0, 90, 255);
+const TRAJECTORY_RGB: [u8; 3] = [0, 90, 255];
 /// Accepted loop closures on `map.png`.
-const ACCEPTED_RGB: RGBColor = RGBColor(0, 170, 0);
+const ACCEPTED_RGB: [u8; 3] = [0, 170, 0];
 /// Rejected loop closures on `map.png`.
-const REJECTED_RGB: RGBColor = RGBColor(220, 0, 0);
+const REJECTED_RGB: [u8; 3] = [220, 0, 0];
 
 /// `map.png`: the map with the trajectory through `poses` (blue) and each loop closure as a
-/// line between its two scans (green accepted, red rejected).
+/// line between its two scans (green accepted, red rejected), in exact colours.
 fn map_png(map: &Raster, poses: &[Pose2], closures: &[slam::Closure]) -> anyhow::Result<Vec<u8>> {
-    let (w, h) = (map.width as u32, map.height as u32);
-    let mut buf: Vec<u8> = map.pixels.iter().flat_map(|&v| [v, v, v]).collect();
+    let (w, h) = (map.width, map.height);
     anyhow::ensure!(
-        buf.len() == 3 * map.width * map.height && w > 0 && h > 0,
+        map.pixels.len() == w * h && w > 0 && h > 0,
         "map.png: an empty map or one of the wrong size"
     );
-    // Pixel coordinates of a world point: x to the right, y down from the top row.
-    let px = |p: &Pose2| {
-        (
-            ((p.x_m - map.origin.x_m()) / map.resolution_m).floor() as i32,
-            (map.height as f64 - (p.y_m - map.origin.y_m()) / map.resolution_m).floor() as i32,
-        )
-    };
-    {
-        let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
-        let draw = |points: Vec<(i32, i32)>, colour: &RGBColor| {
-            root.draw(&PathElement::new(points, colour))
-                .map_err(|e| anyhow::anyhow!("drawing map.png: {e}"))
-        };
-        draw(poses.iter().map(px).collect(), &TRAJECTORY_RGB)?;
-        for c in closures {
-            let (Some(a), Some(b)) = (poses.get(c.from), poses.get(c.to)) else {
-                continue;
-            };
-            let colour = if c.accepted {
-                &ACCEPTED_RGB
-            } else {
-                &REJECTED_RGB
-            };
-            draw(vec![px(a), px(b)], colour)?;
-        }
-        root.present()
-            .map_err(|e| anyhow::anyhow!("drawing map.png: {e:?}"))?;
+    let rgb: Vec<u8> = map.pixels.iter().flat_map(|&v| [v, v, v]).collect();
+    let mut img =
+        image::RgbImage::from_raw(w as u32, h as u32, rgb).context("map.png: wrong buffer size")?;
+    // A pose in cells from the lower-left corner (the grid's own cell of a point is the
+    // floor of these).
+    let r = map.resolution_m;
+    let (col0, row0) = (
+        (map.origin.x_m() / r).round(),
+        (map.origin.y_m() / r).round(),
+    );
+    let cells = |p: &Pose2| (p.x_m / r - col0, p.y_m / r - row0);
+    for pair in poses.windows(2) {
+        segment(&mut img, cells(&pair[0]), cells(&pair[1]), TRAJECTORY_RGB);
     }
-    let img = image::RgbImage::from_raw(w, h, buf).context("map.png: wrong buffer size")?;
+    for c in closures {
+        let (Some(a), Some(b)) = (poses.get(c.from), poses.get(c.to)) else {
+            continue;
+        };
+        let colour = if c.accepted {
+            ACCEPTED_RGB
+        } else {
+            REJECTED_RGB
+        };
+        segment(&mut img, cells(a), cells(b), colour);
+    }
     let mut png = Vec::new();
     img.write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
         .context("encoding map.png")?;
     Ok(png)
+}
+
+/// Paints the cells the segment `a -> b` (in cells from the image's lower-left corner)
+/// crosses inside the image; a segment with a non-finite end is left out.
+fn segment(img: &mut image::RgbImage, a: (f64, f64), b: (f64, f64), colour: [u8; 3]) {
+    let (w, h) = (f64::from(img.width()), f64::from(img.height()));
+    if ![a.0, a.1, b.0, b.1].iter().all(|v| v.is_finite()) {
+        return;
+    }
+    // Clipped to the image (Liang-Barsky), so that the walk below stays within it.
+    let (dx, dy) = (b.0 - a.0, b.1 - a.1);
+    let edge = 1e-9;
+    let (mut t0, mut t1) = (0.0f64, 1.0f64);
+    for (p, q) in [
+        (-dx, a.0),
+        (dx, w - edge - a.0),
+        (-dy, a.1),
+        (dy, h - edge - a.1),
+    ] {
+        if p == 0.0 {
+            if q < 0.0 {
+                return;
+            }
+        } else if p < 0.0 {
+            t0 = t0.max(q / p);
+        } else {
+            t1 = t1.min(q / p);
+        }
+    }
+    if t0 > t1 {
+        return;
+    }
+    let cell = |t: f64| {
+        let (x, y) = (a.0 + t * dx, a.1 + t * dy);
+        (
+            x.floor().clamp(0.0, w - 1.0) as i64,
+            y.floor().clamp(0.0, h - 1.0) as i64,
+        )
+    };
+    let ((mut x, mut y), (x1, y1)) = (cell(t0), cell(t1));
+    // Bresenham between the two cells.
+    let (sx, sy) = ((x1 - x).signum(), (y1 - y).signum());
+    let (ax, ay) = ((x1 - x).abs(), -(y1 - y).abs());
+    let mut err = ax + ay;
+    let top = img.height() as i64 - 1;
+    loop {
+        img.put_pixel(x as u32, (top - y) as u32, image::Rgb(colour));
+        if x == x1 && y == y1 {
+            break;
+        }
+        let e2 = 2 * err;
+        if e2 >= ay {
+            err += ay;
+            x += sx;
+        }
+        if e2 <= ax {
+            err += ax;
+            y += sy;
+        }
+    }
 }
 
 /// The map of `placed` scans in the frame of their reference poses, placed by the first
@@ -401,22 +455,32 @@ mod tests {
 
     #[test]
     fn map_png_draws_the_trajectory_and_the_closures_where_they_are() {
-        // A 40 x 20 pixel map of 0.05 m cells from (0, 0): the pixel of world (x, y) is
-        // column x / 0.05, row 20 - y / 0.05 from the top.
+        // A 40 x 20 pixel map of 0.05 m cells from (-1, -0.5): world (x, y) lies in cell
+        // column floor(x / 0.05) + 20 and row floor(y / 0.05) + 10 from the bottom, which is
+        // pixel row 19 minus that from the top.
         let map = Raster {
             pixels: vec![pixel::FREE; 40 * 20],
             width: 40,
             height: 20,
-            origin: WorldPoint::new(0.0, 0.0),
+            origin: WorldPoint::new(-1.0, -0.5),
             resolution_m: 0.05,
         };
+        let at = |x: f64, y: f64| Pose2::new(x, y, 0.0);
+        let gap = at(f64::NAN, 0.0);
         let poses = [
-            Pose2::new(0.125, 0.125, 0.0),
-            Pose2::new(1.875, 0.125, 0.0),
-            Pose2::new(0.525, 0.525, 0.0),
-            Pose2::new(1.525, 0.525, 0.0),
-            Pose2::new(0.525, 0.825, 0.0),
-            Pose2::new(1.525, 0.825, 0.0),
+            at(-0.875, -0.375), // 0: cell (2, 2), pixel row 17
+            at(0.875, -0.375),  // 1: cell (37, 2)
+            gap,                // 2
+            at(0.0, 0.0),       // 3: on a cell's corner: cell (20, 10), pixel row 9
+            at(1e12, 1e12),     // 4: far beyond the image, up and to the right
+            gap,                // 5
+            at(-0.775, 0.425),  // 6: cell (4, 18)
+            gap,                // 7
+            at(-0.275, -0.075), // 8: cell (14, 8)
+            gap,                // 9
+            at(-0.775, -0.275), // 10: cell (4, 4), pixel row 15
+            gap,                // 11
+            at(0.475, -0.275),  // 12: cell (29, 4)
         ];
         let closure = |from, to, accepted| slam::Closure {
             from,
@@ -431,24 +495,38 @@ mod tests {
             weight: 1.0,
         };
         let closures = [
-            closure(2, 3, true),
-            closure(4, 5, false),
+            closure(6, 8, true),
+            closure(10, 12, false),
             closure(0, 99, true),
+            closure(2, 3, true),
         ];
         let png = map_png(&map, &poses, &closures).unwrap();
         let img = image::load_from_memory(&png).unwrap().to_rgb8();
         assert_eq!(img.dimensions(), (40, 20));
-        let at = |col, row| img.get_pixel(col, row).0;
-        // The first leg of the trajectory runs along y = 0.125 m (row 17), x 0.125-1.875 m.
-        assert_eq!(at(20, 17), [0, 90, 255]);
-        // The accepted closure along y = 0.525 m (row 9), x 0.525-1.525 m (columns 10-30).
-        assert_eq!(at(20, 9), [0, 170, 0]);
-        // The rejected one along y = 0.825 m (row 3).
-        assert_eq!(at(20, 3), [220, 0, 0]);
-        // Beyond a closure's end, and away from every line, the map is as it was.
-        assert_eq!(at(35, 9), [pixel::FREE; 3]);
-        assert_eq!(at(20, 15), [pixel::FREE; 3]);
-        // An empty map is an error, not a panic.
+        let px = |col, row| img.get_pixel(col, row).0;
+        let (blue, green, red) = ([0, 90, 255], [0, 170, 0], [220, 0, 0]);
+        // The leg 0 -> 1 along pixel row 17, columns 2 to 37, and nothing beyond.
+        assert_eq!(px(2, 17), blue);
+        assert_eq!(px(20, 17), blue);
+        assert_eq!(px(37, 17), blue);
+        assert_eq!(px(38, 17), [pixel::FREE; 3]);
+        // From the corner pose, toward the far one: the diagonal (20 + k, 10 + k) from the
+        // bottom, cut at the image's edge.
+        assert_eq!(px(20, 9), blue);
+        assert_eq!(px(25, 4), blue);
+        assert_eq!(px(29, 0), blue);
+        // The accepted closure: the diagonal from cell (4, 18) to (14, 8), in exact colour.
+        assert_eq!(px(4, 1), green);
+        assert_eq!(px(9, 6), green);
+        assert_eq!(px(14, 11), green);
+        // The rejected one along pixel row 15, columns 4 to 29.
+        assert_eq!(px(15, 15), red);
+        assert_eq!(px(30, 15), [pixel::FREE; 3]);
+        // Away from every line the map is as it was; only the four lines were drawn.
+        assert_eq!(px(35, 9), [pixel::FREE; 3]);
+        let drawn = img.pixels().filter(|p| p.0 != [pixel::FREE; 3]).count();
+        assert_eq!(drawn, 36 + 10 + 11 + 26);
+        // An empty map, or one of the wrong size, is an error, not a panic.
         let empty = Raster {
             pixels: Vec::new(),
             width: 0,
@@ -456,6 +534,13 @@ mod tests {
             ..map
         };
         assert!(map_png(&empty, &poses, &closures).is_err());
+        let short = Raster {
+            pixels: vec![pixel::FREE; 10],
+            width: 40,
+            height: 20,
+            ..empty
+        };
+        assert!(map_png(&short, &poses, &closures).is_err());
     }
 
     #[test]
