@@ -212,18 +212,12 @@ impl MatchTarget {
         // Rings of doubling reach: most points lie a few centimetres from their match, and
         // a wide gate's whole square holds many keyframes' hits of the same wall.
         let mut reach = near;
-        // Beyond this reach the search already covers every cell.
-        let whole = [0, 1]
-            .iter()
-            .map(|&a| {
-                let cells = if a == 0 { self.width } else { self.height };
-                let lo = q[a] - self.origin[a];
-                lo.abs().max((cells as f64 * CELL_M - lo).abs()) + CELL_M
-            })
-            .fold(0.0, f64::max);
+        // Beyond this reach the search already covers every cell (worked out only when a
+        // first ring does not settle the query).
+        let mut whole = None;
         loop {
             let found = self.nearest_in(q, n, reach, gate, min_cos);
-            if reach >= gate || reach >= whole {
+            if reach >= gate || whole.is_some_and(|w| reach >= w) {
                 return found.map(|(_, k)| k);
             }
             // Margin for the rounding of cell assignment.
@@ -233,8 +227,23 @@ impl MatchTarget {
             {
                 return Some(k);
             }
+            let whole = *whole.get_or_insert_with(|| self.grid_reach(q));
+            if reach >= whole {
+                return found.map(|(_, k)| k);
+            }
             reach = (2.0 * reach).max(CELL_M).min(gate);
         }
+    }
+
+    /// The reach from `q` beyond which a search covers every cell of the index.
+    fn grid_reach(&self, q: [f64; 2]) -> f64 {
+        [(0, self.width), (1, self.height)]
+            .iter()
+            .map(|&(a, cells)| {
+                let lo = q[a] - self.origin[a];
+                lo.abs().max((cells as f64 * CELL_M - lo).abs()) + CELL_M
+            })
+            .fold(0.0, f64::max)
     }
 
     /// The nearest point within `gate` (squared distance and index into `sorted`) among the
