@@ -30,6 +30,14 @@ pub struct LoopParams {
     pub linear_window_m: f64,
     /// Half-width of the rotation search around the estimate, degrees.
     pub angular_window_deg: f64,
+    /// When the search finds no match within `linear_window_m`, it searches again within
+    /// `drift_per_m` of the path driven since the candidate, up to this half-width, metres
+    /// (the front end's drift over a long loop); such a match must be refined with a
+    /// worst-direction standard deviation of at most `closure_sigma_m`.
+    pub wide_window_m: f64,
+    /// The front end's drift assumed per metre of path, for the wider search (0, the
+    /// default: none; 0.05 helps ACES, see docs/slam.md).
+    pub drift_per_m: f64,
     /// A match is accepted when its field score reaches this (0..1).
     pub min_quality: f64,
     /// Standard deviation of a front-end step along x and y, metres, plus
@@ -75,6 +83,8 @@ impl Default for LoopParams {
             submap_half_scans: 8,
             linear_window_m: 1.5,
             angular_window_deg: 25.0,
+            wide_window_m: 4.0,
+            drift_per_m: 0.0,
             min_quality: 0.6,
             odometry_sigma_m: 0.005,
             odometry_sigma_per_m: 0.015,
@@ -114,6 +124,8 @@ impl LoopParams {
                 ("odometry_sigma_per_rad", self.odometry_sigma_per_rad),
                 ("odometry_sigma_deg_per_m", self.odometry_sigma_deg_per_m),
                 ("linear_window_m", self.linear_window_m),
+                ("wide_window_m", self.wide_window_m),
+                ("drift_per_m", self.drift_per_m),
                 ("angular_window_deg", self.angular_window_deg),
             ],
             |v| v.is_finite() && (0.0..=100.0).contains(&v),
@@ -235,6 +247,13 @@ pub fn close_loops(
     let relative: Vec<Pose2> = (0..n)
         .map(|s| poses[s - s % every].inverse().compose(&poses[s]))
         .collect();
+    // The path driven up to each scan, metres.
+    let path: Vec<f64> = std::iter::once(0.0)
+        .chain(poses[..n].windows(2).scan(0.0, |sum, w| {
+            *sum += w[0].position().distance_m(&w[1].position());
+            Some(*sum)
+        }))
+        .collect();
     let nodes = n.div_ceil(every);
     let mut graph = PoseGraph::new(vec![poses[0]]);
     for m in 1..nodes {
@@ -268,7 +287,7 @@ pub fn close_loops(
                 scans,
                 &points,
                 &estimate,
-                (j * every, i),
+                (j * every, i, path[i] - path[j * every]),
                 (front, &match_params, params),
             ) {
                 Some(Match::Found {
@@ -429,14 +448,14 @@ enum Match {
     Misplaced,
 }
 
-/// Scan `i` matched against the submap of the scans around `j` (at their estimates), when
-/// the search's score reaches `min_quality`.
+/// Scan `i` matched against the submap of the scans around `j` (at their estimates), `path_m`
+/// driven between them, when the search's score reaches `min_quality`.
 fn match_submap(
     geometry: &ScanGeometry,
     scans: &[&Scan],
     points: &[Vec<[f64; 2]>],
     estimate: &dyn Fn(usize) -> Pose2,
-    (j, i): (usize, usize),
+    (j, i, path_m): (usize, usize, f64),
     (front, match_params, params): (&FrontEndParams, &MatchParams, &LoopParams),
 ) -> Option<Match> {
     if points[i].len() < front.min_points {
@@ -451,7 +470,10 @@ fn match_submap(
         world.extend(in_world(pose, &points[k]));
         target.add_scan(&pose, geometry, scans[k], match_params);
     }
-    let window_cells = (params.linear_window_m / front.resolution_m).ceil() as usize + 1;
+    let widest = params
+        .linear_window_m
+        .max(params.wide_window_m.min(params.drift_per_m * path_m));
+    let window_cells = (widest / front.resolution_m).ceil() as usize + 1;
     let grid = ScoreGrid::new(
         &world,
         front.resolution_m,
@@ -465,7 +487,19 @@ fn match_submap(
         translation_cost: 0.0,
         rotation_cost: 0.0,
     };
-    let found = search(&grid, &points[i], &estimate(i), &window, params.min_quality)?;
+    let narrow = search(&grid, &points[i], &estimate(i), &window, params.min_quality);
+    let wide = narrow.is_none() && widest > params.linear_window_m;
+    let found = match narrow {
+        Some(f) => f,
+        None if wide => {
+            let window = Window {
+                linear_m: widest,
+                ..window
+            };
+            search(&grid, &points[i], &estimate(i), &window, params.min_quality)?
+        }
+        None => return None,
+    };
     let aligned = target.align(geometry, scans[i], found.pose, match_params);
     let (pose, refinement) = match aligned {
         // The refinement ran away from the search's pose: that pose stands.
@@ -487,6 +521,13 @@ fn match_submap(
         }
         _ => (found.pose, None),
     };
+    // A wide window spans more of a corridor's look-alike places: the refinement must pin
+    // the position as tightly as a closure claims.
+    let pinned = refinement.is_some_and(|m| m.data_worst_sigma_m <= params.closure_sigma_m);
+    if wide && !pinned {
+        tracing::debug!(j, i, quality = found.quality, "wide loop closure refused");
+        return Some(Match::Unconfirmed);
+    }
     if params.check_candidate {
         // A closure is measured from the candidate's estimate, so a candidate the front end
         // misplaced carries its error into it: its scan must fit its neighbours in the
@@ -667,13 +708,10 @@ mod tests {
             .collect()
     }
 
-    /// Two laps around a block in a room with a pillar, scans ray-cast at the true poses; the
-    /// front end's trajectory is the truth but for one scan, turned by 80 deg (as a front end
-    /// misplaces a scan in a fast turn). Closures from that scan would be measured from its
-    /// wrong estimate, 80 deg off: the candidate check refuses them, and every closure left
-    /// agrees with the truth.
-    #[test]
-    fn a_closure_from_a_misplaced_candidate_is_refused() {
+    /// Two laps around a 4 m x 2 m block in a 12 m x 8 m room with a pillar (at 1.5 m from the
+    /// block, 0.25 m steps, 15 deg turns at corners): the scanner's geometry, the true poses
+    /// and scans ray-cast at them.
+    fn block_laps() -> (ScanGeometry, Vec<Pose2>, Vec<Scan>) {
         // Room 12 m x 8 m, a 4 m x 2 m block in the middle, a 0.5 m pillar near a corner.
         let mut walls = vec![
             [0.0, 0.0, 12.0, 0.0],
@@ -711,6 +749,24 @@ mod tests {
             .iter()
             .map(|p| Scan::from_ranges(&geometry, &ray_cast(&geometry, p, &walls), 0.0))
             .collect();
+        (geometry, truth, scans)
+    }
+
+    /// The error of closure `c`'s measured relative pose against `truth`: metres, degrees.
+    fn closure_error(truth: &[Pose2], c: &Closure) -> (f64, f64) {
+        let got = Pose2::new(c.measured[0], c.measured[1], c.measured[2]);
+        let e = between(&between(&truth[c.from], &truth[c.to]), &got);
+        (e.x_m.hypot(e.y_m), e.theta_rad.abs().to_degrees())
+    }
+
+    /// Two laps around a block in a room with a pillar, scans ray-cast at the true poses; the
+    /// front end's trajectory is the truth but for one scan, turned by 80 deg (as a front end
+    /// misplaces a scan in a fast turn). Closures from that scan would be measured from its
+    /// wrong estimate, 80 deg off: the candidate check refuses them, and every closure left
+    /// agrees with the truth.
+    #[test]
+    fn a_closure_from_a_misplaced_candidate_is_refused() {
+        let (geometry, truth, scans) = block_laps();
         let refs: Vec<&Scan> = scans.iter().collect();
         // Scan 12 (a node: every third scan) on the first side, turned by 80 deg.
         let bad = 12;
@@ -730,11 +786,7 @@ mod tests {
                 .unwrap()
                 .1
         };
-        let error = |c: &Closure| {
-            let got = Pose2::new(c.measured[0], c.measured[1], c.measured[2]);
-            let e = between(&between(&truth[c.from], &truth[c.to]), &got);
-            (e.x_m.hypot(e.y_m), e.theta_rad.abs().to_degrees())
-        };
+        let error = |c: &Closure| closure_error(&truth, c);
         let without = run(false);
         let from_bad: Vec<(f64, f64)> = without
             .closures
@@ -755,6 +807,49 @@ mod tests {
         for c in with.closures.iter().filter(|c| c.accepted) {
             let (m, deg) = error(c);
             assert!(m <= 0.05 && deg <= 1.0, "{c:?}: {m} m {deg} deg");
+        }
+    }
+
+    /// The same two laps, the front end's second lap 2.5 m off along y (as after a slip):
+    /// beyond the 1.5 m window, no closure ties the laps; the wider search, at 0.15 of the
+    /// 24 m lap (3.6 m), finds them, each within 0.05 m and 2 deg of the truth (the bound of
+    /// `evaluation.closures`' 0.2 m or 2 deg, tighter in position).
+    #[test]
+    fn a_wider_search_closes_a_loop_beyond_the_window() {
+        let (geometry, truth, scans) = block_laps();
+        let refs: Vec<&Scan> = scans.iter().collect();
+        let lap = truth.len() / 2;
+        let poses: Vec<Pose2> = truth
+            .iter()
+            .enumerate()
+            .map(|(k, p)| {
+                let off = if k >= lap { 2.5 } else { 0.0 };
+                Pose2::new(p.x_m, p.y_m + off, p.theta_rad)
+            })
+            .collect();
+        let front = FrontEndParams::default();
+        let run = |drift_per_m: f64| {
+            let params = LoopParams {
+                drift_per_m,
+                ..LoopParams::default()
+            };
+            close_loops(&geometry, &refs, &poses, &front, &params)
+                .unwrap()
+                .1
+        };
+        let across = |r: &LoopReport| {
+            r.closures
+                .iter()
+                .filter(|c| c.accepted && c.from < lap && c.to >= lap)
+                .count()
+        };
+        let narrow = run(0.0);
+        assert_eq!(across(&narrow), 0, "{narrow:?}");
+        let wide = run(0.15);
+        assert!(across(&wide) > 0, "{wide:?}");
+        for c in wide.closures.iter().filter(|c| c.accepted) {
+            let (m, deg) = closure_error(&truth, c);
+            assert!(m <= 0.05 && deg <= 2.0, "{c:?}: {m} m {deg} deg");
         }
     }
 }
