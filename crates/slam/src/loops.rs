@@ -30,13 +30,10 @@ pub struct LoopParams {
     pub linear_window_m: f64,
     /// Half-width of the rotation search around the estimate, degrees.
     pub angular_window_deg: f64,
-    /// When the search finds no match within `linear_window_m`, it searches again within
-    /// `drift_per_m` of the path driven since the candidate, up to this half-width, metres
-    /// (the front end's drift over a long loop); such a match must be refined with a
-    /// worst-direction standard deviation of at most `closure_sigma_m`.
+    /// Largest half-width of the wider translation search, metres.
     pub wide_window_m: f64,
-    /// The front end's drift assumed per metre of path, for the wider search (0, the
-    /// default: none; 0.05 helps ACES, see docs/slam.md).
+    /// Drift assumed per metre of path since the candidate, sizing the wider search that
+    /// follows a failed one (0: off).
     pub drift_per_m: f64,
     /// A match is accepted when its field score reaches this (0..1).
     pub min_quality: f64,
@@ -124,8 +121,6 @@ impl LoopParams {
                 ("odometry_sigma_per_rad", self.odometry_sigma_per_rad),
                 ("odometry_sigma_deg_per_m", self.odometry_sigma_deg_per_m),
                 ("linear_window_m", self.linear_window_m),
-                ("wide_window_m", self.wide_window_m),
-                ("drift_per_m", self.drift_per_m),
                 ("angular_window_deg", self.angular_window_deg),
             ],
             |v| v.is_finite() && (0.0..=100.0).contains(&v),
@@ -136,6 +131,16 @@ impl LoopParams {
                 ("min_quality", self.min_quality),
                 ("reject_weight", self.reject_weight),
             ],
+            |v| (0.0..=1.0).contains(&v),
+            "must lie in 0..1",
+        )?;
+        check::each(
+            &[("wide_window_m", self.wide_window_m)],
+            |v| v.is_finite() && (0.0..=20.0).contains(&v),
+            "must lie in 0..20",
+        )?;
+        check::each(
+            &[("drift_per_m", self.drift_per_m)],
             |v| (0.0..=1.0).contains(&v),
             "must lie in 0..1",
         )?;
@@ -152,7 +157,7 @@ pub struct LoopReport {
     /// Submap matches tried.
     pub tried: usize,
     /// Matches that scored `min_quality` but that their ICP refinement did not confirm
-    /// (`require_refinement`); they never enter the graph.
+    /// (`require_refinement`, and always for the wider search); they never enter the graph.
     pub refused: usize,
     /// Matches that scored `min_quality` but whose candidate scan does not fit its submap
     /// neighbours (`check_candidate`); they never enter the graph.
@@ -470,9 +475,13 @@ fn match_submap(
         world.extend(in_world(pose, &points[k]));
         target.add_scan(&pose, geometry, scans[k], match_params);
     }
-    let widest = params
-        .linear_window_m
-        .max(params.wide_window_m.min(params.drift_per_m * path_m));
+    // A non-finite path leaves the window as it is.
+    let reach = params.drift_per_m * path_m;
+    let widest = if reach > params.linear_window_m {
+        reach.min(params.wide_window_m).max(params.linear_window_m)
+    } else {
+        params.linear_window_m
+    };
     let window_cells = (widest / front.resolution_m).ceil() as usize + 1;
     let grid = ScoreGrid::new(
         &world,
@@ -708,9 +717,9 @@ mod tests {
             .collect()
     }
 
-    /// Two laps around a 4 m x 2 m block in a 12 m x 8 m room with a pillar (at 1.5 m from the
-    /// block, 0.25 m steps, 15 deg turns at corners): the scanner's geometry, the true poses
-    /// and scans ray-cast at them.
+    /// Two laps around a 4 m x 2 m block in a 12 m x 8 m room with a pillar (laps 1.5 m from
+    /// the block, 0.25 m steps, 15 deg turns at corners): the scanner's geometry, the true
+    /// poses and scans ray-cast at them.
     fn block_laps() -> (ScanGeometry, Vec<Pose2>, Vec<Scan>) {
         // Room 12 m x 8 m, a 4 m x 2 m block in the middle, a 0.5 m pillar near a corner.
         let mut walls = vec![
@@ -811,9 +820,10 @@ mod tests {
     }
 
     /// The same two laps, the front end's second lap 2.5 m off along y (as after a slip):
-    /// beyond the 1.5 m window, no closure ties the laps; the wider search, at 0.15 of the
-    /// 24 m lap (3.6 m), finds them, each within 0.05 m and 2 deg of the truth (the bound of
-    /// `evaluation.closures`' 0.2 m or 2 deg, tighter in position).
+    /// beyond the 1.5 m window, no closure ties the laps; the wider search, 0.15 of the path
+    /// since the candidate (a 24 m lap and the 2.5 m slip: 4 m, the cap), ties them, each
+    /// closure within 0.05 m and 2 deg of the truth (`evaluation.closures`' bound is 0.2 m or
+    /// 2 deg) and pinned by its refinement to `closure_sigma_m`.
     #[test]
     fn a_wider_search_closes_a_loop_beyond_the_window() {
         let (geometry, truth, scans) = block_laps();
@@ -847,6 +857,14 @@ mod tests {
         assert_eq!(across(&narrow), 0, "{narrow:?}");
         let wide = run(0.15);
         assert!(across(&wide) > 0, "{wide:?}");
+        let sigma = LoopParams::default().closure_sigma_m;
+        for c in wide
+            .closures
+            .iter()
+            .filter(|c| c.accepted && c.from < lap && c.to >= lap)
+        {
+            assert!(c.data_worst_sigma_m.is_some_and(|s| s <= sigma), "{c:?}");
+        }
         for c in wide.closures.iter().filter(|c| c.accepted) {
             let (m, deg) = closure_error(&truth, c);
             assert!(m <= 0.05 && deg <= 2.0, "{c:?}: {m} m {deg} deg");
