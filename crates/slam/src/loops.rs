@@ -59,8 +59,8 @@ pub struct LoopParams {
     pub closure_sigma_deg: f64,
     /// Scale of the Cauchy loss of closures, in standard deviations.
     pub cauchy_scale: f64,
-    /// The final optimisation starts from a Cauchy loss of this scale, a third of it per
-    /// optimisation down to `cauchy_scale`, standard deviations (0: off).
+    /// Cauchy scale the final optimisation starts at, divided by 3 down to `cauchy_scale`
+    /// (0, or at most `cauchy_scale`: off).
     pub graduated_scale: f64,
     /// A closure whose weight under the loss ends below this is counted as rejected.
     pub reject_weight: f64,
@@ -145,7 +145,7 @@ impl LoopParams {
         )?;
         check::each(
             &[("graduated_scale", self.graduated_scale)],
-            |v| (0.0..=1000.0).contains(&v),
+            |v| v.is_finite() && (0.0..=1000.0).contains(&v),
             "must lie in 0..1000",
         )?;
         check::each(
@@ -903,13 +903,15 @@ mod tests {
         }
     }
 
-    /// The corridor of the test above, the front end slipping 2 m in its half turn (step
+    /// The corridor of `a_misleading_closure_in_a_symmetric_corridor_is_rejected`, the front
+    /// end slipping 2 m in its half turn (step
     /// 10 -> 11 measured 2 m long, standard deviation 1 m; the other steps exact and stiff),
     /// so the whole way back sits 2 m off: six closures (the nodes back at x = 0..=5 seen
     /// from the outbound nodes there) say where it truly is, two (the nodes back at 0 and 1
     /// taken for the outbound nodes at 2 and 3, look-alikes) agree with the slip. With the
-    /// way back off by d, the final loss costs 6 ln(1 + (d / 0.09)^2) + 2 ln(1 + ((2 - d) /
-    /// 0.09)^2) + (2 - d)^2: 16.4 at d = 0 against 37.2 at d = 2, but from d = 2 the six weigh
+    /// way back off by d, the objective of the final loss (Cauchy terms, not the reported
+    /// reweighted cost) is 6 ln(1 + (d / 0.09)^2) + 2 ln(1 + ((2 - d) / 0.09)^2) + (2 - d)^2:
+    /// 16.4 at d = 0 against 37.2 at d = 2, but from d = 2 the six weigh
     /// almost nothing and the optimisation stays there. Graduated from 30 standard deviations
     /// it ends at the truth, the two look-alikes weighed below `reject_weight`.
     #[test]
