@@ -793,6 +793,20 @@ mod tests {
         (geometry, truth, scans)
     }
 
+    /// What `close_loops` finds with the front end's defaults and `params` for `scans` taken at
+    /// the front end's `poses`.
+    fn loop_report(
+        geometry: &ScanGeometry,
+        scans: &[Scan],
+        poses: &[Pose2],
+        params: &LoopParams,
+    ) -> LoopReport {
+        let refs: Vec<&Scan> = scans.iter().collect();
+        close_loops(geometry, &refs, poses, &FrontEndParams::default(), params)
+            .unwrap()
+            .1
+    }
+
     /// The error of closure `c`'s measured relative pose against `truth`: metres, degrees.
     fn closure_error(truth: &[Pose2], c: &Closure) -> (f64, f64) {
         let got = Pose2::new(c.measured[0], c.measured[1], c.measured[2]);
@@ -808,7 +822,6 @@ mod tests {
     #[test]
     fn a_closure_from_a_misplaced_candidate_is_refused() {
         let (geometry, truth, scans) = block_laps();
-        let refs: Vec<&Scan> = scans.iter().collect();
         // Scan 12 (a node: every third scan) on the first side, turned by 80 deg.
         let bad = 12;
         let mut poses = truth.clone();
@@ -817,15 +830,12 @@ mod tests {
             poses[bad].y_m,
             poses[bad].theta_rad + 80f64.to_radians(),
         );
-        let front = FrontEndParams::default();
         let run = |check_candidate: bool| {
             let params = LoopParams {
                 check_candidate,
                 ..LoopParams::default()
             };
-            close_loops(&geometry, &refs, &poses, &front, &params)
-                .unwrap()
-                .1
+            loop_report(&geometry, &scans, &poses, &params)
         };
         let error = |c: &Closure| closure_error(&truth, c);
         let without = run(false);
@@ -859,7 +869,6 @@ mod tests {
     #[test]
     fn a_wider_search_closes_a_loop_beyond_the_window() {
         let (geometry, truth, scans) = block_laps();
-        let refs: Vec<&Scan> = scans.iter().collect();
         let lap = truth.len() / 2;
         let poses: Vec<Pose2> = truth
             .iter()
@@ -869,15 +878,12 @@ mod tests {
                 Pose2::new(p.x_m, p.y_m + off, p.theta_rad)
             })
             .collect();
-        let front = FrontEndParams::default();
         let run = |drift_per_m: f64| {
             let params = LoopParams {
                 drift_per_m,
                 ..LoopParams::default()
             };
-            close_loops(&geometry, &refs, &poses, &front, &params)
-                .unwrap()
-                .1
+            loop_report(&geometry, &scans, &poses, &params)
         };
         let across = |r: &LoopReport| {
             r.closures
