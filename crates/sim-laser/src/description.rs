@@ -262,6 +262,8 @@ struct TomlBitmap {
     boundary: bool,
     #[serde(default = "stage_dark_below")]
     dark_below: u16,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    free_region: Option<[f64; 2]>,
 }
 
 fn stage_dark_below() -> u16 {
@@ -534,10 +536,18 @@ fn toml_bitmap(src: &TomlSource, file: &TomlWorld) -> Result<Option<Bitmap>, Sim
     let img = image::open(&img_path)
         .map_err(|e| src.err(line, "bitmap.image", format!("{}: {e}", img_path.display())))?
         .to_rgba8();
-    Ok(Some(
-        bitmap_from_image(&img, v.size, v.centre, v.boundary, v.dark_below)
-            .ok_or_else(|| src.err(line, "bitmap.image", "image is empty".into()))?,
-    ))
+    let mut bitmap = bitmap_from_image(&img, v.size, v.centre, v.boundary, v.dark_below)
+        .ok_or_else(|| src.err(line, "bitmap.image", "image is empty".into()))?;
+    if let Some(at) = v.free_region
+        && !(finite(&at) && bitmap.keep_region_at(at))
+    {
+        return Err(src.err(
+            line,
+            "bitmap.free_region",
+            format!("{at:?} is not on a free cell of the bitmap"),
+        ));
+    }
+    Ok(Some(bitmap))
 }
 
 impl World {

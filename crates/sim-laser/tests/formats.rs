@@ -272,6 +272,58 @@ fn bitmap_dark_below_by_hand() {
 }
 
 #[test]
+fn bitmap_free_region_by_hand() {
+    // A 9 x 7 image, one metre per pixel from (0, 0): a black ring (columns 2-6, rows 2-4)
+    // around the 3 x 1 white strip of row 3, columns 3-5 (a closed block), white around it
+    // but for black corners (they make the whole image the dark pixels' box).
+    let dir = tempfile::tempdir().unwrap();
+    let mut pgm = b"P5\n9 7\n255\n".to_vec();
+    for row in 0..7 {
+        for col in 0..9 {
+            let ring = (2..=4).contains(&row) && (2..=6).contains(&col);
+            let inside = row == 3 && (3..=5).contains(&col);
+            let corner = (row == 0 || row == 6) && (col == 0 || col == 8);
+            pgm.push(if (ring && !inside) || corner { 0 } else { 255 });
+        }
+    }
+    std::fs::write(dir.path().join("b.pgm"), &pgm).unwrap();
+    let toml = dir.path().join("b.toml");
+    let world = |extra: &str| {
+        std::fs::write(
+            &toml,
+            format!("[bitmap]\nimage = \"b.pgm\"\nsize = [9.0, 7.0]\ncentre = [4.5, 3.5]\n{extra}"),
+        )
+        .unwrap();
+        World::load(&toml)
+    };
+    // Read as drawn, the block's inside (x 3-6, y 3-4) is free: from its middle the ray east
+    // meets the ring at x = 6.
+    let w = world("").unwrap();
+    assert!(!w.is_occupied(p(4.5, 3.5)));
+    assert!((w.raycast(p(4.5, 3.5), 0.0, 10.0).unwrap() - 1.5).abs() < 1e-12);
+    // Keeping the region around the ring fills the block's inside; the rest stays free.
+    let w = world("free_region = [0.5, 3.5]\n").unwrap();
+    for x in [3.5, 4.5, 5.5] {
+        assert!(w.is_occupied(p(x, 3.5)), "{x}");
+    }
+    for (x, y) in [(4.5, 6.5), (8.5, 3.5), (1.5, 1.5), (7.5, 5.5)] {
+        assert!(!w.is_occupied(p(x, y)), "{x} {y}");
+    }
+    assert!((w.raycast(p(1.5, 3.5), 0.0, 10.0).unwrap() - 0.5).abs() < 1e-12);
+    // Keeping the block's inside fills everything around the ring instead.
+    let w = world("free_region = [4.5, 3.5]\n").unwrap();
+    assert!(!w.is_occupied(p(4.5, 3.5)));
+    assert!(w.is_occupied(p(1.5, 1.5)) && w.is_occupied(p(7.5, 5.5)));
+    // On a wall, outside the image or not finite: the error names the file, line and key.
+    for at in ["[2.5, 2.5]", "[10.0, 1.0]", "[nan, 1.0]"] {
+        let e = world(&format!("free_region = {at}\n"))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("b.toml:1: bitmap.free_region"), "{e}");
+    }
+}
+
+#[test]
 #[allow(clippy::print_stdout)]
 fn nav2_maps_load() {
     let dir = Path::new(concat!(
@@ -318,6 +370,7 @@ fn shipped_floor_plans_load_at_their_sizes() {
     }
     for (file, w, h) in [
         ("sal2.toml", 44.35, 20.35),
+        ("sal2-open.toml", 44.35, 20.35),
         ("mbicp.toml", 28.0, 10.0),
         ("simple_rooms.toml", 16.0, 12.0),
         ("sri-aic-kwing.toml", 85.6, 29.3),

@@ -143,3 +143,43 @@ pub struct Bitmap {
     /// Occupancy, row-major from the bottom row.
     pub occupied: Vec<bool>,
 }
+
+impl Bitmap {
+    /// Fills every free cell that no path of edge-sharing free cells links to the free cell
+    /// holding `p` (a floor plan's closed, undrawn blocks); `false`, and no change, when `p`
+    /// is outside the bitmap or on a solid cell.
+    pub fn keep_region_at(&mut self, p: [f64; 2]) -> bool {
+        let fx = (p[0] - self.origin[0]) / self.cell_w_m;
+        let fy = (p[1] - self.origin[1]) / self.cell_h_m;
+        if !(fx >= 0.0 && fy >= 0.0 && fx < self.width as f64 && fy < self.height as f64) {
+            return false;
+        }
+        let start = fy as usize * self.width + fx as usize;
+        if self.occupied[start] {
+            return false;
+        }
+        let (w, h) = (self.width, self.height);
+        let mut linked = vec![false; self.occupied.len()];
+        linked[start] = true;
+        let mut todo = vec![start];
+        while let Some(k) = todo.pop() {
+            let (col, row) = (k % w, k / w);
+            let next = [
+                (col > 0).then(|| k - 1),
+                (col + 1 < w).then(|| k + 1),
+                (row > 0).then(|| k - w),
+                (row + 1 < h).then(|| k + w),
+            ];
+            for n in next.into_iter().flatten() {
+                if !self.occupied[n] && !linked[n] {
+                    linked[n] = true;
+                    todo.push(n);
+                }
+            }
+        }
+        for (cell, linked) in self.occupied.iter_mut().zip(linked) {
+            *cell |= !linked;
+        }
+        true
+    }
+}
