@@ -145,9 +145,7 @@ pub struct Bitmap {
 }
 
 impl Bitmap {
-    /// Fills every free cell that no path of edge-sharing free cells links to the free cell
-    /// holding `p` (a floor plan's closed, undrawn blocks); `false`, and no change, when `p`
-    /// is outside the bitmap or on a solid cell.
+    /// Keeps free only the cells edge-connected to the free cell at `p`; false (no change) if none.
     pub fn keep_region_at(&mut self, p: [f64; 2]) -> bool {
         let fx = (p[0] - self.origin[0]) / self.cell_w_m;
         let fy = (p[1] - self.origin[1]) / self.cell_h_m;
