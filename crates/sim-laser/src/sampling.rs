@@ -6,6 +6,7 @@ use rand_chacha::ChaCha8Rng;
 use scan_types::{Pose2, WorldPoint};
 use serde::Serialize;
 
+use crate::world::flood_edges;
 use crate::{GenParams, SimError, World, generate_world};
 
 /// What kind of world a run is in (batch rows and groups carry it).
@@ -120,30 +121,14 @@ impl FreeSpace {
             if !free[startk] || component[startk] != 0 {
                 continue;
             }
-            let mut stack = vec![startk];
             component[startk] = next;
-            while let Some(k) = stack.pop() {
-                let (x, y) = (k % nx, k / nx);
-                let mut push = |xx: usize, yy: usize| {
-                    let kk = yy * nx + xx;
-                    if free[kk] && component[kk] == 0 {
-                        component[kk] = next;
-                        stack.push(kk);
-                    }
-                };
-                if x > 0 {
-                    push(x - 1, y);
+            flood_edges(nx, ny, startk, |k| {
+                let enter = free[k] && component[k] == 0;
+                if enter {
+                    component[k] = next;
                 }
-                if x + 1 < nx {
-                    push(x + 1, y);
-                }
-                if y > 0 {
-                    push(x, y - 1);
-                }
-                if y + 1 < ny {
-                    push(x, y + 1);
-                }
-            }
+                enter
+            });
             next += 1;
         }
         Self {

@@ -11,6 +11,7 @@ mod raycast;
 
 use scan_types::WorldPoint;
 
+pub(crate) use obstacle::flood_edges;
 pub use obstacle::{Bitmap, Obstacle};
 
 /// Primitive the ray caster tests exactly.

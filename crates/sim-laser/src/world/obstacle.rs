@@ -156,28 +156,36 @@ impl Bitmap {
         if self.occupied[start] {
             return false;
         }
-        let (w, h) = (self.width, self.height);
         let mut linked = vec![false; self.occupied.len()];
         linked[start] = true;
-        let mut todo = vec![start];
-        while let Some(k) = todo.pop() {
-            let (col, row) = (k % w, k / w);
-            let next = [
-                (col > 0).then(|| k - 1),
-                (col + 1 < w).then(|| k + 1),
-                (row > 0).then(|| k - w),
-                (row + 1 < h).then(|| k + w),
-            ];
-            for n in next.into_iter().flatten() {
-                if !self.occupied[n] && !linked[n] {
-                    linked[n] = true;
-                    todo.push(n);
-                }
-            }
-        }
+        flood_edges(self.width, self.height, start, |n| {
+            let enter = !self.occupied[n] && !linked[n];
+            linked[n] |= enter;
+            enter
+        });
         for (cell, linked) in self.occupied.iter_mut().zip(linked) {
             *cell |= !linked;
         }
         true
+    }
+}
+
+/// Fills from cell `start` of a `w` x `h` row-major grid through edge-sharing cells; `enter(k)`
+/// marks cell `k` and says whether the fill goes on through it.
+pub(crate) fn flood_edges(w: usize, h: usize, start: usize, mut enter: impl FnMut(usize) -> bool) {
+    let mut todo = vec![start];
+    while let Some(k) = todo.pop() {
+        let (col, row) = (k % w, k / w);
+        let next = [
+            (col > 0).then(|| k - 1),
+            (col + 1 < w).then(|| k + 1),
+            (row > 0).then(|| k - w),
+            (row + 1 < h).then(|| k + w),
+        ];
+        for n in next.into_iter().flatten() {
+            if enter(n) {
+                todo.push(n);
+            }
+        }
     }
 }
