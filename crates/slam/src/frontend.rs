@@ -4,8 +4,9 @@
 
 use std::collections::VecDeque;
 
-use localiser::{MatchParams, MatchTarget};
-use scan_types::{Pose2, Scan, ScanGeometry, angle_diff_rad};
+use localiser::{MatchParams, MatchTarget, ScanMatch};
+use nalgebra::{Matrix3, Vector3};
+use scan_types::{Pose2, Scan, ScanGeometry, angle_diff_rad, normalize_angle_rad};
 use serde::{Deserialize, Serialize};
 
 use crate::correlative::{Window, search};
@@ -85,6 +86,18 @@ pub struct FrontEndParams {
     /// The refinement's submap keeps one point per square of this size and normal
     /// direction, the newest keyframe's (0: every point of every keyframe), metres.
     pub icp_target_voxel_m: f64,
+    /// A motion prediction ([`FrontEnd::add_scan_near`]) and the refined pose are combined,
+    /// each weighed by its information, so that the prediction holds the directions the scan
+    /// leaves free (along a corridor); false keeps the laser's pose alone.
+    pub fuse_prediction: bool,
+    /// The prediction's position standard deviation, metres ...
+    pub prediction_sigma_m: f64,
+    /// ... plus this share of the predicted step's length ...
+    pub prediction_sigma_per_m: f64,
+    /// ... and its heading standard deviation, degrees ...
+    pub prediction_sigma_deg: f64,
+    /// ... plus this share of the predicted step's turn.
+    pub prediction_sigma_per_rad: f64,
 }
 
 impl Default for FrontEndParams {
@@ -118,6 +131,11 @@ impl Default for FrontEndParams {
             max_refine_loss: 0.05,
             icp_stride: 2,
             icp_target_voxel_m: 0.0,
+            fuse_prediction: true,
+            prediction_sigma_m: 0.002,
+            prediction_sigma_per_m: 0.01,
+            prediction_sigma_deg: 1.0,
+            prediction_sigma_per_rad: 0.05,
         }
     }
 }
@@ -133,6 +151,8 @@ impl FrontEndParams {
                 ("max_range_m", self.max_range_m),
                 ("voxel_m", self.voxel_m),
                 ("max_refine_shift_m", self.max_refine_shift_m),
+                ("prediction_sigma_m", self.prediction_sigma_m),
+                ("prediction_sigma_deg", self.prediction_sigma_deg),
             ],
             check::positive,
             "must be a positive number",
@@ -152,6 +172,8 @@ impl FrontEndParams {
                 ("narrow_window_m", self.narrow_window_m),
                 ("narrow_window_deg", self.narrow_window_deg),
                 ("icp_target_voxel_m", self.icp_target_voxel_m),
+                ("prediction_sigma_per_m", self.prediction_sigma_per_m),
+                ("prediction_sigma_per_rad", self.prediction_sigma_per_rad),
             ],
             |v| v.is_finite() && v >= 0.0,
             "must be a number >= 0",
@@ -196,6 +218,34 @@ impl FrontEndParams {
             return Err(bad("submap_keyframes", 0.0, "must be at least 1"));
         }
         Ok(())
+    }
+}
+
+/// The pose of least combined cost between a match at `pose` with the data's `information`
+/// (x, y, heading) and a prediction of position and heading standard deviations `sigma_m` and
+/// `sigma_rad`: the prediction holds what the data leave free. `pose` when no finite answer.
+fn fuse(
+    pose: Pose2,
+    information: &[[f64; 3]; 3],
+    predicted: Pose2,
+    sigma_m: f64,
+    sigma_rad: f64,
+) -> Pose2 {
+    let prior = Vector3::new(sigma_m.powi(-2), sigma_m.powi(-2), sigma_rad.powi(-2));
+    let h = Matrix3::from_fn(|r, c| information[r][c]) + Matrix3::from_diagonal(&prior);
+    let offset = Vector3::new(
+        predicted.x_m - pose.x_m,
+        predicted.y_m - pose.y_m,
+        angle_diff_rad(predicted.theta_rad, pose.theta_rad),
+    );
+    // (H_data + H_prior) d = H_prior (prediction - pose).
+    match h.lu().solve(&prior.component_mul(&offset)) {
+        Some(d) if d.iter().all(|v| v.is_finite()) => Pose2::new(
+            pose.x_m + d[0],
+            pose.y_m + d[1],
+            normalize_angle_rad(pose.theta_rad + d[2]),
+        ),
+        _ => pose,
     }
 }
 
@@ -383,7 +433,8 @@ impl FrontEnd {
             .before_last
             .map_or(Pose2::default(), |b| b.inverse().compose(&last));
         let guess = prediction.unwrap_or_else(|| last.compose(&step));
-        if let Some((pose, quality, sigma)) = self.local(geometry, scan, &points, guess) {
+        if let Some((m, quality)) = self.local(geometry, scan, &points, guess) {
+            let pose = self.fused(&m, prediction.filter(|_| commit));
             let keyframe = self.is_keyframe(&pose);
             if commit {
                 self.place(pose, geometry, scan, &points, keyframe);
@@ -392,7 +443,7 @@ impl FrontEnd {
                 pose,
                 quality,
                 refined: true,
-                sigma_m: Some(sigma),
+                sigma_m: Some(m.data_worst_sigma_m),
                 keyframe,
                 wide: false,
             };
@@ -447,7 +498,13 @@ impl FrontEnd {
             wide,
             "correlative placement"
         );
-        let (pose, sigma_m) = self.refine(geometry, scan, &points, found);
+        let (pose, sigma_m) = match self.refine(geometry, scan, &points, found) {
+            Some(m) => (
+                self.fused(&m, prediction.filter(|_| commit)),
+                Some(m.data_worst_sigma_m),
+            ),
+            None => (found.pose, None),
+        };
         let keyframe = self.is_keyframe(&pose);
         if commit {
             self.place(pose, geometry, scan, &points, keyframe);
@@ -469,7 +526,7 @@ impl FrontEnd {
         scan: &Scan,
         points: &[[f64; 2]],
         guess: Pose2,
-    ) -> Option<(Pose2, f64, f64)> {
+    ) -> Option<(ScanMatch, f64)> {
         if !self.params.refine || self.params.local_quality >= 1.0 {
             return None;
         }
@@ -488,39 +545,47 @@ impl FrontEnd {
         }
         let quality = crate::correlative::quality(self.grid.as_ref()?, points, &m.pose);
         tracing::trace!(quality, "local match");
-        (quality >= self.params.local_quality).then_some((m.pose, quality, m.data_worst_sigma_m))
+        (quality >= self.params.local_quality).then_some((m, quality))
     }
 
-    /// The correlative pose refined by ICP, and the refinement's worst-direction sigma when
-    /// it was (`None`: a refinement that moves too far or lowers the field score is refused).
+    /// The correlative pose refined by ICP (`None`: no refinement, or one that moves too far
+    /// or lowers the field score, is refused).
     fn refine(
         &mut self,
         geometry: &ScanGeometry,
         scan: &Scan,
         points: &[[f64; 2]],
         found: crate::correlative::Found,
-    ) -> (Pose2, Option<f64>) {
+    ) -> Option<ScanMatch> {
         let coarse = found.pose;
         if !self.params.refine {
-            return (coarse, None);
+            return None;
         }
         let shift = self.params.max_refine_shift_m;
-        let Some(m) = self
+        let m = self
             .target
             .align(geometry, scan, coarse, &self.match_params)
-            .filter(|m| m.pose.position().distance_m(&coarse.position()) <= shift)
-        else {
-            return (coarse, None);
-        };
+            .filter(|m| m.pose.position().distance_m(&coarse.position()) <= shift)?;
         let grid = self
             .grid
             .as_ref()
             .expect("a submap exists once a scan is placed");
         let refined_quality = crate::correlative::quality(grid, points, &m.pose);
-        if refined_quality < found.quality - self.params.max_refine_loss {
-            return (coarse, None);
-        }
-        (m.pose, Some(m.data_worst_sigma_m))
+        (refined_quality >= found.quality - self.params.max_refine_loss).then_some(m)
+    }
+
+    /// The refined pose combined with the motion `prediction`, each weighed by its information
+    /// ([`FrontEndParams::fuse_prediction`]); the refined pose alone without a prediction.
+    fn fused(&self, m: &ScanMatch, prediction: Option<Pose2>) -> Pose2 {
+        let p = &self.params;
+        let (Some(predicted), Some(last), true) = (prediction, self.last, p.fuse_prediction) else {
+            return m.pose;
+        };
+        let step = last.inverse().compose(&predicted);
+        let sigma_m = p.prediction_sigma_m + p.prediction_sigma_per_m * step.x_m.hypot(step.y_m);
+        let sigma_rad =
+            p.prediction_sigma_deg.to_radians() + p.prediction_sigma_per_rad * step.theta_rad.abs();
+        fuse(m.pose, &m.data_information, predicted, sigma_m, sigma_rad)
     }
 
     fn is_keyframe(&self, pose: &Pose2) -> bool {
@@ -616,6 +681,37 @@ mod tests {
     use super::*;
 
     #[test]
+    fn a_prediction_holds_the_direction_the_scan_leaves_free() {
+        // A corridor along x: the data pin y and the heading (1e6 each), leave x free.
+        let info = [[0.0, 0.0, 0.0], [0.0, 1e6, 0.0], [0.0, 0.0, 1e6]];
+        let matched = Pose2::new(1.0, 0.0, 0.0);
+        let predicted = Pose2::new(1.2, 0.05, 0.01);
+        // Prior information 1 / 0.01^2 = 1e4 on each axis.
+        let f = fuse(matched, &info, predicted, 0.01, 0.01);
+        // x: no data, the prediction's 1.2; y and heading: 1e4 / (1e6 + 1e4) of the offset.
+        assert!((f.x_m - 1.2).abs() < 1e-12, "{f:?}");
+        assert!((f.y_m - 0.05 * 1e4 / 1.01e6).abs() < 1e-12, "{f:?}");
+        assert!((f.theta_rad - 0.01 * 1e4 / 1.01e6).abs() < 1e-12, "{f:?}");
+        // Coupled data: x and y tied (a wall along the diagonal pins x - y only).
+        let diag = [[1e6, -1e6, 0.0], [-1e6, 1e6, 0.0], [0.0, 0.0, 1e6]];
+        let f = fuse(
+            Pose2::default(),
+            &diag,
+            Pose2::new(0.1, 0.1, 0.0),
+            0.01,
+            0.01,
+        );
+        // The offset (0.1, 0.1) lies along the free direction (1, 1): taken whole.
+        assert!(
+            (f.x_m - 0.1).abs() < 1e-9 && (f.y_m - 0.1).abs() < 1e-9,
+            "{f:?}"
+        );
+        // A non-finite prediction leaves the match's pose.
+        let f = fuse(matched, &info, Pose2::new(f64::NAN, 0.0, 0.0), 0.01, 0.01);
+        assert_eq!(f, matched);
+    }
+
+    #[test]
     fn out_of_range_values_are_refused_by_name() {
         let with = |voxel: f64| {
             FrontEndParams {
@@ -641,5 +737,23 @@ mod tests {
                 .to_string()
                 .contains("icp_stride")
         );
+        let sigmas = |m: f64, per_m: f64| {
+            FrontEndParams {
+                prediction_sigma_m: m,
+                prediction_sigma_per_m: per_m,
+                ..FrontEndParams::default()
+            }
+            .validate()
+        };
+        assert!(sigmas(0.002, 0.0).is_ok());
+        for (m, per_m, key) in [
+            (0.0, 0.01, "prediction_sigma_m"),
+            (f64::NAN, 0.01, "prediction_sigma_m"),
+            (0.002, -0.1, "prediction_sigma_per_m"),
+            (0.002, f64::INFINITY, "prediction_sigma_per_m"),
+        ] {
+            let e = sigmas(m, per_m).expect_err("refused").to_string();
+            assert!(e.contains(key), "{m} {per_m}: {e}");
+        }
     }
 }
