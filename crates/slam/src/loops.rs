@@ -71,6 +71,10 @@ pub struct LoopParams {
     /// Refuse a match whose candidate scan, at its estimate, scores below `min_quality`
     /// against the other scans of its submap (the front end misplaced it).
     pub check_candidate: bool,
+    /// Refuse a match whose refinement leaves the position looser than this in its worst
+    /// direction (one standard deviation from the data alone, metres; a stretch of corridor
+    /// that slides along itself); infinite: off.
+    pub closure_max_sigma_m: f64,
 }
 
 impl Default for LoopParams {
@@ -99,6 +103,7 @@ impl Default for LoopParams {
             reject_weight: 0.3,
             require_refinement: true,
             check_candidate: true,
+            closure_max_sigma_m: 0.03,
         }
     }
 }
@@ -137,6 +142,11 @@ impl LoopParams {
             ],
             |v| (0.0..=1.0).contains(&v),
             "must lie in 0..1",
+        )?;
+        check::each(
+            &[("closure_max_sigma_m", self.closure_max_sigma_m)],
+            |v| v > 0.0,
+            "must be a positive number (inf: off)",
         )?;
         check::each(
             &[("wide_window_m", self.wide_window_m)],
@@ -565,6 +575,10 @@ fn match_submap(
     // A wide window spans more of a corridor's look-alike places: the refinement must pin
     // the position as tightly as a closure claims.
     let pinned = refinement.is_some_and(|m| m.data_worst_sigma_m <= params.closure_sigma_m);
+    if refinement.is_some_and(|m| m.data_worst_sigma_m > params.closure_max_sigma_m) {
+        tracing::debug!(j, i, quality = found.quality, "loose loop closure refused");
+        return Some(Match::Unconfirmed);
+    }
     if wide && !pinned {
         tracing::debug!(j, i, quality = found.quality, "wide loop closure refused");
         return Some(Match::Unconfirmed);
@@ -603,6 +617,22 @@ fn match_submap(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_closure_gate_that_is_not_positive_is_refused_by_name() {
+        let with = |closure_max_sigma_m: f64| {
+            LoopParams {
+                closure_max_sigma_m,
+                ..LoopParams::default()
+            }
+            .validate()
+        };
+        assert!(with(0.03).is_ok() && with(f64::INFINITY).is_ok());
+        for bad in [0.0, -0.01, f64::NAN] {
+            let e = with(bad).expect_err("refused").to_string();
+            assert!(e.contains("closure_max_sigma_m"), "{bad}: {e}");
+        }
+    }
 
     #[test]
     fn a_closure_of_near_hits_gets_a_looser_heading() {
@@ -858,6 +888,72 @@ mod tests {
         for c in with.closures.iter().filter(|c| c.accepted) {
             let (m, deg) = error(c);
             assert!(m <= 0.05 && deg <= 1.0, "{c:?}: {m} m {deg} deg");
+        }
+    }
+
+    /// Out and back along a corridor 2 m wide whose ends lie beyond the 20 m range (0.25 m
+    /// steps over 10 m, a half turn in 15 deg steps), the front end's way back slid 1 m along
+    /// it. The scans pin the position across the corridor and leave it free along it, so a
+    /// match between the two ways may land anywhere along the window. Without the sigma gate
+    /// such matches enter the graph as closures, metres off the truth (only the robust loss
+    /// can keep them out); with it every one is refused.
+    #[test]
+    fn a_closure_that_could_slide_along_a_corridor_is_refused() {
+        use std::f64::consts::PI;
+        let walls = [[-100.0, 0.0, 100.0, 0.0], [-100.0, 2.0, 100.0, 2.0]];
+        let mut truth: Vec<Pose2> = (0..=40)
+            .map(|k| Pose2::new(k as f64 * 0.25, 1.0, 0.0))
+            .collect();
+        truth.extend((1..=12).map(|k| Pose2::new(10.0, 1.0, k as f64 * 15f64.to_radians())));
+        truth.extend((1..=40).map(|k| Pose2::new(10.0 - k as f64 * 0.25, 1.0, PI)));
+        let geometry = ScanGeometry::centred(541, 270f64.to_radians(), 0.1, 20.0).unwrap();
+        let scans: Vec<Scan> = truth
+            .iter()
+            .map(|p| Scan::from_ranges(&geometry, &ray_cast(&geometry, p, &walls), 0.0))
+            .collect();
+        let back = 41 + 12;
+        let poses: Vec<Pose2> = truth
+            .iter()
+            .enumerate()
+            .map(|(k, p)| {
+                let slide = if k >= back { 1.0 } else { 0.0 };
+                Pose2::new(p.x_m + slide, p.y_m, p.theta_rad)
+            })
+            .collect();
+        let run = |closure_max_sigma_m: f64| {
+            let params = LoopParams {
+                closure_max_sigma_m,
+                ..LoopParams::default()
+            };
+            loop_report(&geometry, &scans, &poses, &params)
+        };
+        let across = |r: &LoopReport| -> Vec<Closure> {
+            r.closures
+                .iter()
+                .filter(|c| c.from < back && c.to >= back)
+                .cloned()
+                .collect()
+        };
+        let open = run(f64::INFINITY);
+        let found = across(&open);
+        let gate = LoopParams::default().closure_max_sigma_m;
+        assert!(!found.is_empty(), "{open:?}");
+        assert!(
+            found
+                .iter()
+                .all(|c| c.data_worst_sigma_m.is_some_and(|s| s > gate)),
+            "{found:?}"
+        );
+        assert!(
+            found.iter().any(|c| closure_error(&truth, c).0 > 0.5),
+            "{found:?}"
+        );
+        let gated = run(gate);
+        assert!(across(&gated).is_empty(), "{gated:?}");
+        assert!(gated.refused >= open.refused + found.len(), "{gated:?}");
+        for c in gated.closures.iter().filter(|c| c.accepted) {
+            let (m, deg) = closure_error(&truth, c);
+            assert!(m <= 0.2 && deg <= 2.0, "{c:?}: {m} m {deg} deg");
         }
     }
 
