@@ -365,7 +365,8 @@ impl FrontEnd {
 
     /// Places the next scan (of `geometry`) with the search centred on `prediction` (a pose
     /// from a motion model, e.g. the commands a robot gave since its last scan) instead of
-    /// the constant-velocity model: the narrow window first, then the wide one. The first
+    /// the constant-velocity model: the narrow window first, then the wide one; a refined pose
+    /// is combined with the prediction ([`FrontEndParams::fuse_prediction`]). The first
     /// scan is placed at `prediction` itself, so that the poses are in the caller's frame.
     pub fn add_scan_near(
         &mut self,
@@ -376,7 +377,8 @@ impl FrontEnd {
         self.add_scan_from(geometry, scan, Some(prediction), true)
     }
 
-    /// Where the scan would be placed with the search centred on `prediction`, without
+    /// Where the scan would be placed with the search centred on `prediction` (never fused
+    /// with it), without
     /// adding it: the caller decides the pose and adds the scan with [`FrontEnd::insert_at`]
     /// (an online user that refuses a placement keeps the submap in its own frame). Before
     /// the first insertion there is nothing to match: the answer is `prediction`, unrefined.
@@ -711,6 +713,59 @@ mod tests {
         assert_eq!(f, matched);
     }
 
+    /// A 6 m x 4 m room with a box (every direction pinned), scans ray-cast at the truth: the
+    /// second scan 0.05 m on, its prediction 0.02 m further along x. The refinement alone
+    /// lands on the truth; fused, the pose moves toward the prediction by the prior's small
+    /// share, strictly between the two; `locate_near` never fuses.
+    #[test]
+    fn add_scan_near_fuses_and_locate_near_does_not() {
+        use scan_types::testkit::{boxed, scan_at};
+        let mut walls = boxed(-3.0, -2.0, 3.0, 2.0);
+        walls.extend(boxed(1.0, 0.5, 1.6, 1.1));
+        let g = ScanGeometry::centred(541, 270f64.to_radians(), 0.1, 20.0).unwrap();
+        let first = scan_at(&g, &walls, 0.0, 0.0, 0.0);
+        let second = scan_at(&g, &walls, 0.05, 0.0, 0.0);
+        let predicted = Pose2::new(0.07, 0.0, 0.0);
+        let place = |fuse_prediction: bool, locate: bool| {
+            let mut fe = FrontEnd::new(FrontEndParams {
+                fuse_prediction,
+                ..FrontEndParams::default()
+            })
+            .unwrap();
+            fe.add_scan_near(&g, &first, Pose2::default());
+            let placed = if locate {
+                fe.locate_near(&g, &second, predicted)
+            } else {
+                fe.add_scan_near(&g, &second, predicted)
+            };
+            match placed {
+                Placement::Placed {
+                    pose,
+                    refined: true,
+                    ..
+                } => pose,
+                other => panic!("{other:?}"),
+            }
+        };
+        let plain = place(false, false);
+        assert!(
+            (plain.x_m - 0.05).abs() < 0.005 && plain.y_m.abs() < 0.005,
+            "{plain:?}"
+        );
+        // `locate_near` searches its window alone (no narrow search): fused or not, the same.
+        let located = place(true, true);
+        assert_eq!(located, place(false, true));
+        assert!(
+            located.position().distance_m(&plain.position()) < 0.001,
+            "{located:?}"
+        );
+        let fused = place(true, false);
+        assert!(
+            fused.x_m > plain.x_m && fused.x_m < predicted.x_m,
+            "{fused:?} {plain:?}"
+        );
+    }
+
     #[test]
     fn out_of_range_values_are_refused_by_name() {
         let with = |voxel: f64| {
@@ -737,23 +792,27 @@ mod tests {
                 .to_string()
                 .contains("icp_stride")
         );
-        let sigmas = |m: f64, per_m: f64| {
+        let sigmas = |v: [f64; 4]| {
             FrontEndParams {
-                prediction_sigma_m: m,
-                prediction_sigma_per_m: per_m,
+                prediction_sigma_m: v[0],
+                prediction_sigma_per_m: v[1],
+                prediction_sigma_deg: v[2],
+                prediction_sigma_per_rad: v[3],
                 ..FrontEndParams::default()
             }
             .validate()
         };
-        assert!(sigmas(0.002, 0.0).is_ok());
-        for (m, per_m, key) in [
-            (0.0, 0.01, "prediction_sigma_m"),
-            (f64::NAN, 0.01, "prediction_sigma_m"),
-            (0.002, -0.1, "prediction_sigma_per_m"),
-            (0.002, f64::INFINITY, "prediction_sigma_per_m"),
+        assert!(sigmas([0.002, 0.0, 1.0, 0.0]).is_ok());
+        for (v, key) in [
+            ([0.0, 0.01, 1.0, 0.05], "prediction_sigma_m"),
+            ([f64::NAN, 0.01, 1.0, 0.05], "prediction_sigma_m"),
+            ([0.002, -0.1, 1.0, 0.05], "prediction_sigma_per_m"),
+            ([0.002, f64::INFINITY, 1.0, 0.05], "prediction_sigma_per_m"),
+            ([0.002, 0.01, 0.0, 0.05], "prediction_sigma_deg"),
+            ([0.002, 0.01, 1.0, -1.0], "prediction_sigma_per_rad"),
         ] {
-            let e = sigmas(m, per_m).expect_err("refused").to_string();
-            assert!(e.contains(key), "{m} {per_m}: {e}");
+            let e = sigmas(v).expect_err("refused").to_string();
+            assert!(e.contains(key), "{v:?}: {e}");
         }
     }
 }
