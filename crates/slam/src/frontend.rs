@@ -435,8 +435,10 @@ impl FrontEnd {
             .before_last
             .map_or(Pose2::default(), |b| b.inverse().compose(&last));
         let guess = prediction.unwrap_or_else(|| last.compose(&step));
+        // Only a placement that is kept is fused (`locate_near` answers the laser's pose).
+        let fuse_with = prediction.filter(|_| commit);
         if let Some((m, quality)) = self.local(geometry, scan, &points, guess) {
-            let pose = self.fused(&m, prediction.filter(|_| commit));
+            let pose = self.fused(&m, fuse_with);
             let keyframe = self.is_keyframe(&pose);
             if commit {
                 self.place(pose, geometry, scan, &points, keyframe);
@@ -501,10 +503,7 @@ impl FrontEnd {
             "correlative placement"
         );
         let (pose, sigma_m) = match self.refine(geometry, scan, &points, found) {
-            Some(m) => (
-                self.fused(&m, prediction.filter(|_| commit)),
-                Some(m.data_worst_sigma_m),
-            ),
+            Some(m) => (self.fused(&m, fuse_with), Some(m.data_worst_sigma_m)),
             None => (found.pose, None),
         };
         let keyframe = self.is_keyframe(&pose);

@@ -572,17 +572,24 @@ fn match_submap(
         }
         _ => (found.pose, None),
     };
-    // A wide window spans more of a corridor's look-alike places: the refinement must pin
-    // the position as tightly as a closure claims.
-    let pinned = refinement.is_some_and(|m| m.data_worst_sigma_m <= params.closure_sigma_m);
-    // A refinement that ran away left the search's pose in place above, and is not gated.
-    let loose = |s: f64| s.is_nan() || s > params.closure_max_sigma_m;
-    if refinement.is_some_and(|m| loose(m.data_worst_sigma_m)) {
-        tracing::debug!(j, i, quality = found.quality, "loose loop closure refused");
-        return Some(Match::Unconfirmed);
-    }
-    if wide && !pinned {
-        tracing::debug!(j, i, quality = found.quality, "wide loop closure refused");
+    // A refinement must pin the position to `closure_max_sigma_m`; a wide window spans more
+    // of a corridor's look-alike places, so there it must pin it as tightly as a closure
+    // claims, and be there at all. A refinement that ran away (the search's pose kept above)
+    // is not gated in the narrow window.
+    let max_sigma_m = if wide {
+        params.closure_max_sigma_m.min(params.closure_sigma_m)
+    } else {
+        params.closure_max_sigma_m
+    };
+    let pinned = refinement.is_some_and(|m| m.data_worst_sigma_m <= max_sigma_m);
+    if !pinned && (wide || refinement.is_some()) {
+        tracing::debug!(
+            j,
+            i,
+            quality = found.quality,
+            wide,
+            "loose loop closure refused"
+        );
         return Some(Match::Unconfirmed);
     }
     if params.check_candidate {
