@@ -225,6 +225,7 @@ fn matched(
     let l = &nav.params.localiser;
     let prior = MatchParams {
         prior_sigma_m: l.match_prior_m + l.match_prior_per_m * ahead_m.abs(),
+        prior_sigma_rad: l.drive_turn_sigma_deg.to_radians(),
         ..*params
     };
     let mut best = target.align(&nav.geometry, scan, guess, &prior);
@@ -239,7 +240,7 @@ fn matched(
         // laser's, without pull toward the commands.
         let loose = MatchParams {
             prior_sigma_m: ahead_m.abs(),
-            ..*params
+            ..prior
         };
         for share in PARTIAL_SHARES {
             let seed = Pose2::new(share * ahead_m, 0.0, 0.0);

@@ -561,15 +561,28 @@ impl Navigator {
                 target_in_view,
                 narrow,
                 ..
-            } => self.start_turn(
-                alpha_rad,
-                scan,
-                AfterTurn::Leg {
-                    travel_m,
-                    target_in_view,
-                    narrow,
-                },
-            ),
+            } => {
+                if narrow.is_none()
+                    && !target_in_view
+                    && self.turn_skippable(alpha_rad, travel_m, &scan)
+                {
+                    tracing::debug!(
+                        alpha_deg = alpha_rad.to_degrees(),
+                        travel_m,
+                        "small turn skipped; driving straight ahead"
+                    );
+                    return self.start_leg(scan, travel_m, target_in_view, None);
+                }
+                self.start_turn(
+                    alpha_rad,
+                    scan,
+                    AfterTurn::Leg {
+                        travel_m,
+                        target_in_view,
+                        narrow,
+                    },
+                )
+            }
             Plan::Unreachable { tries } => self.finish(
                 Reason::Unreachable,
                 format!("the planner found no way to the target after {tries} tries"),
@@ -584,6 +597,21 @@ impl Navigator {
                 self.start_turn(turn, scan, AfterTurn::Replan)
             }
         }
+    }
+
+    /// Whether the turn onto a ray `alpha_rad` off the heading can be left out: it is small,
+    /// the scan holds too little to measure it on, and the way straight ahead is clear for the
+    /// leg, on the scan and on the memory.
+    fn turn_skippable(&mut self, alpha_rad: f64, travel_m: f64, scan: &Scan) -> bool {
+        let below = self.params.navigator.skip_turn_below_deg.to_radians();
+        if alpha_rad == 0.0 || alpha_rad.abs() >= below {
+            return false;
+        }
+        if scan.robot_hits(&self.geometry).count() >= self.params.navigator.skip_turn_max_hits {
+            return false;
+        }
+        let want = travel_m.min(self.params.planner.max_leg_m);
+        self.free_ahead_m(scan) >= want && self.planner.free_ahead_m(&self.estimate, want) >= want
     }
 
     /// Rotates by `alpha` (step 4) in chunks the scans can still align.

@@ -178,6 +178,10 @@ pub struct LocaliserParams {
     /// refused (the base drives straight; such a match paired the wrong points), degrees.
     #[serde(default = "no_drive_turn_gate")]
     pub drive_max_turn_deg: f64,
+    /// Standard deviation of a drive's heading change, what a drive's scan match weighs the
+    /// data's heading against (the base drives straight), degrees.
+    #[serde(default = "loose_drive_turn_prior")]
+    pub drive_turn_sigma_deg: f64,
     /// Online SLAM: every turn chunk's scan, every `slam_step_m` of a drive and every leg's
     /// last scan are placed against a submap of recent keyframes by the slam crate's
     /// correlative scan-to-submap matching, searched around the pose the rules above give;
@@ -331,6 +335,16 @@ fn no_drive_turn_gate() -> f64 {
     180.0
 }
 
+fn default_drive_turn_sigma_deg() -> f64 {
+    0.1
+}
+
+/// A configuration without `drive_turn_sigma_deg` (a recording made before it) runs as then:
+/// the matcher's own 2 deg.
+fn loose_drive_turn_prior() -> f64 {
+    2.0
+}
+
 fn default_slam_window_m() -> f64 {
     0.3
 }
@@ -391,6 +405,15 @@ pub struct LoopParams {
     /// The final leg drives straight at the target when it lies within this bearing (or in
     /// the view of the chosen ray), degrees.
     pub final_leg_bearing_deg: f64,
+    /// A turn onto a ray less than this far off the heading is not made when the scan holds
+    /// fewer than `skip_turn_max_hits` hits and the way straight ahead is as clear (an
+    /// unmeasured turn costs the base's whole turn error, however small), degrees; 0: every
+    /// turn is made.
+    #[serde(default)]
+    pub skip_turn_below_deg: f64,
+    /// A scan with at least this many hits measures a turn: its small turns are made.
+    #[serde(default = "default_skip_turn_max_hits")]
+    pub skip_turn_max_hits: usize,
     /// A leg shorter than this is not driven (counts as a failed try), metres.
     pub min_leg_m: f64,
     /// A leg that brings less progress than this counts as a failed try, metres.
@@ -413,6 +436,10 @@ pub struct LoopParams {
 
 fn default_arrival_max_sigma_m() -> f64 {
     0.3
+}
+
+fn default_skip_turn_max_hits() -> usize {
+    60
 }
 
 fn default_min_legs() -> usize {
@@ -491,6 +518,7 @@ impl Params {
                 turn_match_gate_m: 0.15,
                 map_resolution_m: 0.05,
                 drive_max_turn_deg: default_drive_max_turn_deg(),
+                drive_turn_sigma_deg: default_drive_turn_sigma_deg(),
                 slam: false,
                 slam_window_m: default_slam_window_m(),
                 slam_window_deg: default_slam_window_deg(),
@@ -523,6 +551,8 @@ impl Params {
                 rotation_chunk_deg: 90.0,
                 free_ahead_window_deg: 2.0,
                 final_leg_bearing_deg: 3.0,
+                skip_turn_below_deg: 4.0,
+                skip_turn_max_hits: default_skip_turn_max_hits(),
                 min_leg_m: 0.05,
                 min_progress_m: 0.05,
                 short_leg_m: 1.0,
@@ -549,6 +579,7 @@ impl Params {
         c.localiser.heading_rule = HeadingRule::Commanded;
         c.localiser.travel_rule = TravelRule::Landmark;
         c.localiser.revisit = false;
+        c.navigator.skip_turn_below_deg = 0.0;
         c
     }
 
@@ -631,6 +662,7 @@ impl Params {
             ("localiser.turn_match_gate_m", z.turn_match_gate_m, 0.0, 5.0, true),
             ("localiser.map_resolution_m", z.map_resolution_m, 0.01, 1.0, false),
             ("localiser.drive_max_turn_deg", z.drive_max_turn_deg, 0.0, 180.0, true),
+            ("localiser.drive_turn_sigma_deg", z.drive_turn_sigma_deg, 0.0, 90.0, true),
             ("localiser.slam_window_m", z.slam_window_m, 0.0, 1.6, true),
             ("localiser.slam_window_deg", z.slam_window_deg, 0.0, 90.0, true),
             ("localiser.slam_step_m", z.slam_step_m, 0.0, 10.0, true),
@@ -658,6 +690,8 @@ impl Params {
             ("navigator.rotation_chunk_deg", n.rotation_chunk_deg, 0.0, 180.0, true),
             ("navigator.free_ahead_window_deg", n.free_ahead_window_deg, 0.0, 90.0, false),
             ("navigator.final_leg_bearing_deg", n.final_leg_bearing_deg, 0.0, 90.0, false),
+            ("navigator.skip_turn_below_deg", n.skip_turn_below_deg, 0.0, 90.0, false),
+            ("navigator.skip_turn_max_hits", count(n.skip_turn_max_hits), 0.0, 1e6, false),
             ("navigator.min_leg_m", n.min_leg_m, 0.0, 10.0, false),
             ("navigator.min_progress_m", n.min_progress_m, 0.0, 10.0, false),
             ("navigator.short_leg_m", n.short_leg_m, 0.0, 100.0, true),

@@ -356,6 +356,15 @@ impl Planner {
         }
     }
 
+    /// How far straight ahead of `from` a full-margin leg stays out of remembered obstacles
+    /// (their band included), up to `length_m`, metres.
+    pub fn free_ahead_m(&self, from: &Pose2, length_m: f64) -> f64 {
+        if !length_m.is_finite() || length_m <= 0.0 {
+            return 0.0;
+        }
+        self.memory_cap_m(from, 0.0, length_m, false)
+    }
+
     /// [`Planner::check_leg`] on the memory with the hits of `scan`, taken at `from`, added for
     /// the check only (the memory is left as it was: a scan taken while driving, not yet
     /// localised, is not remembered); `None` when the scan occupies no new cell (nothing new
