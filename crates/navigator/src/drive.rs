@@ -237,7 +237,8 @@ fn matched(
     if ahead_m.abs() >= PARTIAL_MIN_M && disagrees {
         let hits = scan.robot_hits(&nav.geometry).count();
         // The commands do not explain the scan: try partial travel, a hypothesis of the
-        // laser's, without pull toward the commands.
+        // laser's, without pull toward the commanded distance (the heading keeps its prior:
+        // the base drives straight however far it got).
         let loose = MatchParams {
             prior_sigma_m: ahead_m.abs(),
             ..prior

@@ -604,13 +604,17 @@ impl Navigator {
     /// leg, on the scan and on the memory.
     fn turn_skippable(&mut self, alpha_rad: f64, travel_m: f64, scan: &Scan) -> bool {
         let below = self.params.navigator.skip_turn_below_deg.to_radians();
-        if alpha_rad == 0.0 || alpha_rad.abs() >= below {
+        if alpha_rad == 0.0 || alpha_rad.is_nan() || alpha_rad.abs() >= below {
             return false;
         }
         if scan.robot_hits(&self.geometry).count() >= self.params.navigator.skip_turn_max_hits {
             return false;
         }
         let want = travel_m.min(self.params.planner.max_leg_m);
+        // A leg too short to drive would be refused and replanned on the same scan.
+        if want.is_nan() || want < self.params.navigator.min_leg_m {
+            return false;
+        }
         self.free_ahead_m(scan) >= want && self.planner.free_ahead_m(&self.estimate, want) >= want
     }
 

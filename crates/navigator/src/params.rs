@@ -405,10 +405,9 @@ pub struct LoopParams {
     /// The final leg drives straight at the target when it lies within this bearing (or in
     /// the view of the chosen ray), degrees.
     pub final_leg_bearing_deg: f64,
-    /// A turn onto a ray less than this far off the heading is not made when the scan holds
-    /// fewer than `skip_turn_max_hits` hits and the way straight ahead is as clear (an
-    /// unmeasured turn costs the base's whole turn error, however small), degrees; 0: every
-    /// turn is made.
+    /// A turn onto a ray less than this off the heading is left out when the scan holds fewer
+    /// than `skip_turn_max_hits` hits and the leg's way straight ahead is clear, degrees; 0:
+    /// every turn is made.
     #[serde(default)]
     pub skip_turn_below_deg: f64,
     /// A scan with at least this many hits measures a turn: its small turns are made.
@@ -662,7 +661,7 @@ impl Params {
             ("localiser.turn_match_gate_m", z.turn_match_gate_m, 0.0, 5.0, true),
             ("localiser.map_resolution_m", z.map_resolution_m, 0.01, 1.0, false),
             ("localiser.drive_max_turn_deg", z.drive_max_turn_deg, 0.0, 180.0, true),
-            ("localiser.drive_turn_sigma_deg", z.drive_turn_sigma_deg, 0.0, 90.0, true),
+            ("localiser.drive_turn_sigma_deg", z.drive_turn_sigma_deg, 0.001, 90.0, false),
             ("localiser.slam_window_m", z.slam_window_m, 0.0, 1.6, true),
             ("localiser.slam_window_deg", z.slam_window_deg, 0.0, 90.0, true),
             ("localiser.slam_step_m", z.slam_step_m, 0.0, 10.0, true),
@@ -782,6 +781,33 @@ mod tests {
         assert_eq!(Params::preset(Method::Paper), p);
         assert!(p.validate().is_ok() && g.validate().is_ok());
         assert_eq!(p.planner.replan_step_m, 0.0);
+        assert_eq!(g.navigator.skip_turn_below_deg, 4.0);
+        assert_eq!(p.navigator.skip_turn_below_deg, 0.0);
+        assert_eq!(g.localiser.drive_turn_sigma_deg, 0.1);
+        assert_eq!(p.localiser.drive_turn_sigma_deg, 0.1);
+    }
+
+    #[test]
+    fn settings_stored_before_the_drive_and_turn_rules_keep_the_old_ones() {
+        let g = Params::goalseek();
+        let mut stored = serde_json::to_value(&g).unwrap();
+        stored["localiser"]
+            .as_object_mut()
+            .unwrap()
+            .remove("drive_turn_sigma_deg");
+        let n = stored["navigator"].as_object_mut().unwrap();
+        n.remove("skip_turn_below_deg");
+        n.remove("skip_turn_max_hits");
+        let old: Params = serde_json::from_value(stored).unwrap();
+        // The matcher's own heading prior (2 deg), every turn made.
+        assert_eq!(old.localiser.drive_turn_sigma_deg, 2.0);
+        assert_eq!(old.navigator.skip_turn_below_deg, 0.0);
+        assert_eq!(old.navigator.skip_turn_max_hits, 60);
+        assert!(old.validate().is_ok());
+        let mut back = old;
+        back.localiser.drive_turn_sigma_deg = g.localiser.drive_turn_sigma_deg;
+        back.navigator.skip_turn_below_deg = g.navigator.skip_turn_below_deg;
+        assert_eq!(back, g);
     }
 
     #[test]

@@ -22,8 +22,14 @@ const GOAL: (f64, f64) = (10.0, 0.35);
 const SKIP_DEG: f64 = 8.0;
 
 fn navigator(skip_deg: f64) -> Navigator {
+    navigator_with(skip_deg, Params::goalseek().navigator.skip_turn_max_hits)
+}
+
+/// [`navigator`] whose scans measure a turn from `max_hits` hits on.
+fn navigator_with(skip_deg: f64, max_hits: usize) -> Navigator {
     let mut p = Params::goalseek();
     p.navigator.skip_turn_below_deg = skip_deg;
+    p.navigator.skip_turn_max_hits = max_hits;
     Navigator::new(
         p,
         ScanGeometry::paper(),
@@ -80,16 +86,35 @@ fn a_small_turn_the_laser_can_measure_is_made() {
         }
         other => panic!("expected a turn, got {other:?}"),
     }
+    // The same wall, with a turn counted as measurable only from 1 000 hits: left out.
+    let mut nav = navigator_with(SKIP_DEG, 1000);
+    assert!(
+        matches!(
+            first_motion(&mut nav, &hall_with_wall()),
+            Action::Forward { .. }
+        ),
+        "expected a drive"
+    );
 }
 
 #[test]
 fn a_run_that_skips_small_turns_still_arrives() {
     // On an exact base the run ends where the estimate says: within the goal tolerance
-    // (0.15 m) of the target, the final leg turned onto the target itself.
-    let mut nav = navigator(SKIP_DEG);
-    let start = Pose2::new(0.0, 0.0, 0.0);
-    let truth = base::drive(&mut nav, &hall(), start, (1.0, 1.0), |_| {});
-    assert_eq!(nav.pending(), Action::Finish(Reason::Reached));
+    // (0.15 m) of the target, the final leg turned onto the target itself. Its first drive
+    // keeps the start's heading (the turn left out); with every turn made it does not.
+    let first_heading = |skip_deg: f64| {
+        let mut nav = navigator(skip_deg);
+        let mut first = None;
+        let start = Pose2::new(0.0, 0.0, 0.0);
+        let truth = base::drive(&mut nav, &hall(), start, (1.0, 1.0), |p| {
+            first.get_or_insert(p.theta_rad);
+        });
+        assert_eq!(nav.pending(), Action::Finish(Reason::Reached));
+        (first.unwrap(), truth)
+    };
+    assert_ne!(first_heading(0.0).0, 0.0);
+    let (heading, truth) = first_heading(SKIP_DEG);
+    assert_eq!(heading, 0.0);
     let miss = truth
         .position()
         .distance_m(&WorldPoint::new(GOAL.0, GOAL.1));

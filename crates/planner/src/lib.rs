@@ -357,11 +357,16 @@ impl Planner {
     }
 
     /// How far straight ahead of `from` a full-margin leg stays out of remembered obstacles
-    /// (their band included), up to `length_m`, metres.
+    /// (their band included), up to `length_m` and the longest leg, metres; 0 for a length
+    /// that is not finite and positive.
+    ///
+    /// A leg that starts within an obstacle's inflation is free until it leaves it, as in
+    /// [`Planner::check_leg`].
     pub fn free_ahead_m(&self, from: &Pose2, length_m: f64) -> f64 {
-        if !length_m.is_finite() || length_m <= 0.0 {
+        if !(length_m.is_finite() && length_m > 0.0) {
             return 0.0;
         }
+        let length_m = length_m.min(self.params.max_travel_m);
         self.memory_cap_m(from, 0.0, length_m, false)
     }
 

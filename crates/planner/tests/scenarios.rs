@@ -423,6 +423,33 @@ fn a_leg_is_judged_on_what_the_memory_holds_now() {
 }
 
 #[test]
+fn free_ahead_keeps_the_full_margin_and_refuses_bad_lengths() {
+    // The wall of the test above, across the way at x = 1.5 m.
+    let g = ScanGeometry::paper();
+    let from = Pose2::new(0.0, 0.0, 0.0);
+    let mut planner = Planner::new(PlannerParams::default());
+    // Nothing remembered: free up to the length asked, and at most the longest leg (2 m).
+    assert_eq!(planner.free_ahead_m(&from, 1.7), 1.7);
+    assert_eq!(planner.free_ahead_m(&from, 1e12), 2.0);
+    for bad in [0.0, -1.0, f64::NAN, f64::INFINITY] {
+        assert_eq!(planner.free_ahead_m(&from, bad), 0.0, "{bad}");
+    }
+    let wall = vec![((1.5, -1.0), (1.5, 1.0))];
+    planner.add_scan(&from, &g, &testkit::scan_at(&g, &wall, 0.0, 0.0, 0.0));
+    // The full inflation reaches r + margin - one cell = 0.3 m, i.e. 3 cells, from the hit's
+    // cell in (1.4, 1.5]: the first blocked 5 cm step lies in [1.1, 1.2], and the leg is free
+    // to the step before it. The lethal core alone (check_leg) lets it go further.
+    let free = planner.free_ahead_m(&from, 2.0);
+    assert!(free > 1.05 - 1e-9 && free < 1.15 + 1e-9, "{free}");
+    let core = planner
+        .check_leg(&from, 2.0, WorldPoint::new(5.0, 0.0))
+        .free_m;
+    assert!(free < core, "{free} {core}");
+    // Short of the wall the whole length is free.
+    assert_eq!(planner.free_ahead_m(&from, 0.8), 0.8);
+}
+
+#[test]
 fn a_scan_added_for_a_check_only_is_not_remembered() {
     // The wall of the test above, seen in a scan added for one check only.
     let g = ScanGeometry::paper();

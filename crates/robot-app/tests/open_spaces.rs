@@ -79,7 +79,8 @@ fn a_drive_match_weighs_its_heading_against_a_straight_drive() {
     // puts into the estimate is error. Weighed against the matcher's own 2 deg prior, a match
     // on a few posts still turns the estimate by tenths of a degree per metre; against the
     // drive's own 0.1 deg the heading is held unless the scans pin it harder. Over clutter
-    // worlds 0..20 (noise seed 0, every turn made in both) the final heading error is lower.
+    // worlds 0..20 (noise seed 0, every turn made in both) the median final heading error is
+    // lower.
     let median_heading_error = |sigma_deg: f64| {
         let mut errors: Vec<f64> = (0..20)
             .map(|k| {
@@ -95,8 +96,9 @@ fn a_drive_match_weighs_its_heading_against_a_straight_drive() {
     };
     let loose = median_heading_error(2.0);
     let tight = median_heading_error(0.1);
+    // A quarter lower at least (half, when measured).
     assert!(
-        tight < loose,
+        tight < 0.75 * loose,
         "median heading error {tight:.2} deg with 0.1 deg, {loose:.2} deg with 2 deg"
     );
 }
