@@ -612,7 +612,7 @@ impl Navigator {
         }
         let want = travel_m.min(self.params.planner.max_leg_m);
         // A leg too short to drive would be refused and replanned on the same scan.
-        if want.is_nan() || want < self.params.navigator.min_leg_m {
+        if want < self.params.navigator.min_leg_m {
             return false;
         }
         self.free_ahead_m(scan) >= want && self.planner.free_ahead_m(&self.estimate, want) >= want

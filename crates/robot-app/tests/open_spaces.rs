@@ -24,6 +24,12 @@ fn run(k: u64, change: impl FnOnce(&mut Params)) -> robot_app::outputs::Summary 
         .summary
 }
 
+/// The drive and turn rules before the drive's heading prior and the skipped small turns.
+fn old_rules(p: &mut Params) {
+    p.localiser.drive_turn_sigma_deg = 2.0;
+    p.navigator.skip_turn_below_deg = 0.0;
+}
+
 #[test]
 fn a_straight_drive_keeps_its_heading_in_open_clutter() {
     // The simulator's base never turns while driving forward. Accepting matches that turn the
@@ -36,9 +42,8 @@ fn a_straight_drive_keeps_its_heading_in_open_clutter() {
     for k in [42, 43] {
         // Before: any match taken, with the matcher's own 2 deg heading prior, every turn made.
         let before = run(k, |p| {
+            old_rules(p);
             p.localiser.drive_max_turn_deg = 180.0;
-            p.localiser.drive_turn_sigma_deg = 2.0;
-            p.navigator.skip_turn_below_deg = 0.0;
         });
         assert_eq!(
             before.reason,
@@ -51,10 +56,7 @@ fn a_straight_drive_keeps_its_heading_in_open_clutter() {
             before.final_heading_error_deg.unwrap().abs() > 5.0,
             "world {k}"
         );
-        let after = run(k, |p| {
-            p.localiser.drive_turn_sigma_deg = 2.0;
-            p.navigator.skip_turn_below_deg = 0.0;
-        });
+        let after = run(k, old_rules);
         assert!(after.reached, "world {k}: {}", after.note);
         assert!(after.goal_distance_m.unwrap() <= 0.3);
         assert!(
