@@ -1,5 +1,6 @@
-//! The planner on the paper's world: `plan()` with the path-length field cached, `plan()` when
-//! the field must be recomputed (the map or the target changed), and `add_scan`.
+//! The planner on the paper's world: `plan()` with the path-length field cached (with and
+//! without the line-of-sight ranking), `plan()` when the field must be recomputed (the map or
+//! the target changed), and `add_scan`.
 //!
 //! Run: `cargo bench --bench planner -- --quick`.
 #![allow(clippy::print_stderr, clippy::print_stdout)] // benches and tests report to the terminal
@@ -22,8 +23,14 @@ fn bench_planner(c: &mut Criterion) {
         .map(|&(x, y, h)| (Pose2::new(x, y, h), paper_world::scan(&world, &g, x, y, h)))
         .collect();
     let mut planner = Planner::new(PlannerParams::default());
+    // The same without the line-of-sight ranking (the grid path alone).
+    let mut grid_only = Planner::new(PlannerParams {
+        line_of_sight: false,
+        ..PlannerParams::default()
+    });
     for (pose, scan) in &scans {
         planner.add_scan(pose, &g, scan);
+        grid_only.add_scan(pose, &g, scan);
     }
     let (pose, scan) = &scans[1];
     let mut clearance = vec![0.0; g.ray_count];
@@ -34,6 +41,9 @@ fn bench_planner(c: &mut Criterion) {
     let mut group = c.benchmark_group("planner");
     group.bench_function("plan_map_path_cached_field", |b| {
         b.iter(|| black_box(planner.plan(pose, &g, scan, &clearance, target)))
+    });
+    group.bench_function("plan_map_path_cached_field_grid_only", |b| {
+        b.iter(|| black_box(grid_only.plan(pose, &g, scan, &clearance, target)))
     });
     // Alternating targets forces a new path-length field every call.
     let mut flip = false;

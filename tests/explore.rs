@@ -115,6 +115,10 @@ fn the_paper_world_is_explored_without_a_goal() {
     );
     assert!(s["coverage_share"].as_f64().unwrap() >= 0.95, "{s}");
     assert!(s["map_accuracy_share"].as_f64().unwrap() >= 0.98, "{s}");
+    // Exploring's own default: the planner's line of sight off (goal seeking's preset has it).
+    let used = robot_app::config::load(Some(&out.join("config.toml")), None).unwrap();
+    assert!(!used.planner.line_of_sight);
+    assert!(robot_app::config::Params::goalseek().planner.line_of_sight);
     // No --slam-map: no SLAM map to score.
     assert!(s["slam_map_coverage_share"].is_null(), "{s}");
     assert!(s["slam_map_accuracy_share"].is_null(), "{s}");
@@ -272,4 +276,20 @@ fn revisits_keep_the_map_of_simple_rooms_accurate() {
         err(&with) <= 0.05 && err(&with) < err(&without),
         "{without}\n{with}"
     );
+}
+
+/// Exploring starts from the preset with the planner's line of sight off; a `--config` file
+/// still sets it, and every other key keeps the preset's value.
+#[test]
+fn explore_defaults_sit_under_the_config_file() {
+    use robot_app::cmd::explore::explore_defaults;
+    use robot_app::config::{Params, from_toml_str_over, load_over};
+    let bare = load_over(None, None, explore_defaults).unwrap();
+    let mut expected = Params::goalseek();
+    expected.planner.line_of_sight = false;
+    assert_eq!(bare, expected);
+    let on = from_toml_str_over("[planner]\nline_of_sight = true\n", None, explore_defaults);
+    assert_eq!(on.unwrap(), Params::goalseek());
+    let paper = from_toml_str_over("method = \"paper\"\n", None, explore_defaults).unwrap();
+    assert_eq!(paper, Params::paper());
 }

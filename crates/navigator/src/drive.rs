@@ -247,7 +247,7 @@ fn matched(
             let seed = Pose2::new(share * ahead_m, 0.0, 0.0);
             if let Some(m) = target.align(&nav.geometry, scan, seed, &loose)
                 && (best.is_some() || m.pairs as f64 >= ALONE_SHARE * hits as f64)
-                && fits_better(&m, best.as_ref())
+                && fits_better(&m, best.as_ref(), l.partial_travel_max_sigma_m)
             {
                 best = Some(m);
             }
@@ -292,10 +292,15 @@ fn matched(
 }
 
 /// True when match `m` explains the scan clearly better than `current`: more points paired
-/// and no worse a fit, along a direction the data pin down (in a featureless corridor every
-/// travel fits alike, and the commands stand).
-fn fits_better(m: &localiser::ScanMatch, current: Option<&localiser::ScanMatch>) -> bool {
-    if m.data_worst_sigma_m > CONSTRAINED_SIGMA_M {
+/// and no worse a fit, along a direction the data pin down to `max_sigma_m` (in a featureless
+/// corridor every travel fits alike, and among a few posts another travel may fit by chance:
+/// the commands stand).
+fn fits_better(
+    m: &localiser::ScanMatch,
+    current: Option<&localiser::ScanMatch>,
+    max_sigma_m: f64,
+) -> bool {
+    if m.data_worst_sigma_m > max_sigma_m {
         return false;
     }
     match current {

@@ -113,6 +113,12 @@ pub struct PlanningParams {
     /// also what a stored configuration without the key means).
     #[serde(default)]
     pub replan_step_m: f64,
+    /// map_path only: a leg end from which the target is in line of sight on the planner's
+    /// map is ranked by its straight-line distance (the grid path's 8 directions would aim
+    /// up to 22.5 deg off the target). Off (the grid path alone) in a stored configuration
+    /// without the key.
+    #[serde(default)]
+    pub line_of_sight: bool,
 }
 
 /// Landmark detection and selection.
@@ -182,6 +188,11 @@ pub struct LocaliserParams {
     /// data's heading against (the base drives straight), degrees.
     #[serde(default = "loose_drive_turn_prior")]
     pub drive_turn_sigma_deg: f64,
+    /// A drive's match that puts the travel at a share of the command (a base that stalled or
+    /// slipped) replaces the command only when its data pin the travel this well, metres (one
+    /// standard deviation).
+    #[serde(default = "loose_partial_travel_sigma")]
+    pub partial_travel_max_sigma_m: f64,
     /// Online SLAM: every turn chunk's scan, every `slam_step_m` of a drive and every leg's
     /// last scan are placed against a submap of recent keyframes by the slam crate's
     /// correlative scan-to-submap matching, searched around the pose the rules above give;
@@ -339,6 +350,16 @@ fn default_drive_turn_sigma_deg() -> f64 {
     0.1
 }
 
+fn default_partial_travel_max_sigma_m() -> f64 {
+    0.02
+}
+
+/// A configuration without `partial_travel_max_sigma_m` (a recording made before it) runs as
+/// then: any match that pins the travel to 0.05 m.
+fn loose_partial_travel_sigma() -> f64 {
+    0.05
+}
+
 /// A configuration without `drive_turn_sigma_deg` (a recording made before it) runs as then:
 /// the matcher's own 2 deg.
 fn loose_drive_turn_prior() -> f64 {
@@ -490,6 +511,7 @@ impl Params {
                 remember_turned_away_hits: true,
                 // Off: measured no better (docs/navigator.md, "Replanning while driving").
                 replan_step_m: 0.0,
+                line_of_sight: true,
             },
             landmarks: LandmarkParams {
                 neighbour_n: 1,
@@ -518,6 +540,7 @@ impl Params {
                 map_resolution_m: 0.05,
                 drive_max_turn_deg: default_drive_max_turn_deg(),
                 drive_turn_sigma_deg: default_drive_turn_sigma_deg(),
+                partial_travel_max_sigma_m: default_partial_travel_max_sigma_m(),
                 slam: false,
                 slam_window_m: default_slam_window_m(),
                 slam_window_deg: default_slam_window_deg(),
@@ -573,6 +596,7 @@ impl Params {
         c.planner.width_window_deg = 0.0;
         c.planner.remember_turned_away_hits = false;
         c.planner.replan_step_m = 0.0;
+        c.planner.line_of_sight = false;
         c.landmarks.range_limit_margin_m = 0.0;
         c.tracking.gate_m = 0.2;
         c.localiser.heading_rule = HeadingRule::Commanded;
@@ -662,6 +686,7 @@ impl Params {
             ("localiser.map_resolution_m", z.map_resolution_m, 0.01, 1.0, false),
             ("localiser.drive_max_turn_deg", z.drive_max_turn_deg, 0.0, 180.0, true),
             ("localiser.drive_turn_sigma_deg", z.drive_turn_sigma_deg, 0.001, 90.0, false),
+            ("localiser.partial_travel_max_sigma_m", z.partial_travel_max_sigma_m, 0.0, 1.0, false),
             ("localiser.slam_window_m", z.slam_window_m, 0.0, 1.6, true),
             ("localiser.slam_window_deg", z.slam_window_deg, 0.0, 90.0, true),
             ("localiser.slam_step_m", z.slam_step_m, 0.0, 10.0, true),
@@ -741,6 +766,7 @@ impl Params {
             robot_radius_m: self.robot.radius_m,
             margin_m: self.robot.expansion_margin_m,
             narrow_margin_m: self.robot.narrow_margin_m,
+            line_of_sight: self.planner.line_of_sight,
             min_travel_m: self.planner.min_travel_m,
             max_travel_m: self.planner.max_leg_m,
             grid_resolution_m: self.planner.grid_resolution_m,
@@ -795,18 +821,31 @@ mod tests {
             .as_object_mut()
             .unwrap()
             .remove("drive_turn_sigma_deg");
+        stored["localiser"]
+            .as_object_mut()
+            .unwrap()
+            .remove("partial_travel_max_sigma_m");
         let n = stored["navigator"].as_object_mut().unwrap();
         n.remove("skip_turn_below_deg");
         n.remove("skip_turn_max_hits");
+        stored["planner"]
+            .as_object_mut()
+            .unwrap()
+            .remove("line_of_sight");
         let old: Params = serde_json::from_value(stored).unwrap();
         // The matcher's own heading prior (2 deg), every turn made.
         assert_eq!(old.localiser.drive_turn_sigma_deg, 2.0);
+        assert_eq!(old.localiser.partial_travel_max_sigma_m, 0.05);
         assert_eq!(old.navigator.skip_turn_below_deg, 0.0);
         assert_eq!(old.navigator.skip_turn_max_hits, 60);
+        // The grid path alone ranks the rays.
+        assert!(!old.planner.line_of_sight && !old.planner_params().line_of_sight);
         assert!(old.validate().is_ok());
         let mut back = old;
         back.localiser.drive_turn_sigma_deg = g.localiser.drive_turn_sigma_deg;
+        back.localiser.partial_travel_max_sigma_m = 0.02;
         back.navigator.skip_turn_below_deg = g.navigator.skip_turn_below_deg;
+        back.planner.line_of_sight = true;
         assert_eq!(back, g);
     }
 

@@ -83,6 +83,10 @@ pub struct PlannerParams {
     /// 2 (r + `narrow_margin_m`) wide is accepted; the full margin is kept wherever there is
     /// room, metres.
     pub narrow_margin_m: f64,
+    /// MapPath only: a safe end from which the target is in line of sight on the memory is
+    /// ranked by its straight-line distance, not its grid path (whose 8 directions would pick
+    /// a ray up to 22.5 deg off the target's bearing in the open).
+    pub line_of_sight: bool,
 }
 
 impl Default for PlannerParams {
@@ -99,6 +103,7 @@ impl Default for PlannerParams {
             max_no_safe_tries: 12,
             grid_resolution_m: 0.1,
             narrow_margin_m: 0.025,
+            line_of_sight: true,
         }
     }
 }
@@ -464,6 +469,9 @@ impl Planner {
                 Err(unreachable) => return unreachable,
             };
         self.rank_candidates(pose, geometry, clearances_m, (n, target), map_path);
+        if map_path && self.params.line_of_sight {
+            self.rank_in_sight(pose, geometry, target);
+        }
         if let (Some(narrow), true) = (narrow_m, map_path && self.through_band) {
             self.rank_narrow(pose, geometry, (clearances_m, narrow), n);
         }
@@ -616,6 +624,37 @@ impl Planner {
         }
     }
 
+    /// Ranks the candidates whose safe end sees the target on the memory by their straight-line
+    /// distance to it, nearest first, as long as that can beat the best score.
+    fn rank_in_sight(&mut self, pose: &Pose2, geometry: &ScanGeometry, target: WorldPoint) {
+        let dirs = geometry.directions();
+        let end = |c: &Candidate| {
+            let u = dirs[c.ray];
+            pose.transform_point(RobotPoint::new(c.travel * u[0], c.travel * u[1]))
+        };
+        let mut order: Vec<(f64, usize)> = self
+            .candidates
+            .iter()
+            .enumerate()
+            .map(|(k, c)| (end(c).distance_m(&target), k))
+            .collect();
+        order.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let mut best = self
+            .candidates
+            .iter()
+            .map(|c| c.score)
+            .fold(f64::INFINITY, f64::min);
+        for (straight, k) in order {
+            if straight >= best {
+                break;
+            }
+            if let Some(d) = self.memory.line_of_sight_m(end(&self.candidates[k])) {
+                self.candidates[k].score = d;
+                best = best.min(d);
+            }
+        }
+    }
+
     /// Adds the narrow legs: rays whose narrow clearance reaches clearly farther than their
     /// full one, scored by their end's path cost plus the band cost of their own stretch.
     fn rank_narrow(
@@ -651,7 +690,7 @@ impl Planner {
             let end =
                 pose.transform_point(RobotPoint::new(travel * dirs[i][0], travel * dirs[i][1]));
             // The band only adds cost: a leg no better than the best full one is not judged.
-            let Some(to_go) = self.memory.path_length_m(end).filter(|&c| c < best_full) else {
+            let Some(to_go) = self.to_go_m(end).filter(|&c| c < best_full) else {
                 continue;
             };
             let (band, spot, mid) = self.band_cost(dirs[i], travel);
@@ -690,6 +729,19 @@ impl Planner {
             });
         }
         self.judge_gaps(&too_narrow, &wide_enough);
+    }
+
+    /// The path length from `end` to the target on the memory, or its straight-line distance
+    /// when it sees the target and [`PlannerParams::line_of_sight`] is on, metres.
+    fn to_go_m(&self, end: WorldPoint) -> Option<f64> {
+        let path = self.memory.path_length_m(end);
+        if !self.params.line_of_sight {
+            return path;
+        }
+        match (path, self.memory.line_of_sight_m(end)) {
+            (Some(p), Some(l)) => Some(p.min(l)),
+            (p, l) => p.or(l),
+        }
     }
 
     /// Counts the plans in which a gap was measured too narrow (and never wide enough); after

@@ -56,6 +56,8 @@ pub struct ObstacleMemory {
     field: Vec<u32>,
     field_base_m: f64,
     field_key: Option<(u64, (i64, i64))>,
+    /// The last field's target, world coordinates.
+    field_target: (f64, f64),
     /// Scratch of the wavefront: seeds not yet due, (cost, cell), costliest first.
     seeds: Vec<(u32, u32)>,
     /// Scratch of the wavefront: one bucket per cost modulo the bucket count.
@@ -114,6 +116,7 @@ impl ObstacleMemory {
             field: Vec::new(),
             field_base_m: 0.0,
             field_key: None,
+            field_target: (0.0, 0.0),
             seeds: Vec::new(),
             buckets: vec![Vec::new(); (DIAGONAL * BAND_FACTOR + 1) as usize],
             popped: Vec::new(),
@@ -375,6 +378,7 @@ impl ObstacleMemory {
         }
         self.wavefront();
         self.field_key = Some((self.version, key_cell));
+        self.field_target = (x, y);
         true
     }
 
@@ -553,6 +557,74 @@ impl ObstacleMemory {
         }
     }
 
+    /// Straight-line distance from `p` to the last field's target when the segment between
+    /// them crosses no cell the field counts closed, metres; `None` otherwise, or when the
+    /// memory changed since the field was computed.
+    ///
+    /// Closed cells within two cells of `p` before the line's first free one (a safe end right
+    /// at an obstacle's edge) and within the inflation of the target (a target next to a
+    /// wall) do not count, as in the field.
+    pub fn line_of_sight_m(&self, p: WorldPoint) -> Option<f64> {
+        if self.field_key.map(|k| k.0) != Some(self.version) {
+            return None;
+        }
+        let (px, py) = (p.x_m(), p.y_m());
+        let (tx, ty) = self.field_target;
+        let d = (tx - px).hypot(ty - py);
+        if !d.is_finite() {
+            return None;
+        }
+        let radius = if self.through_band {
+            self.inflate_m
+        } else {
+            self.grow_m
+        };
+        let (ux, uy) = if d > 0.0 {
+            ((tx - px) / d, (ty - py) / d)
+        } else {
+            (0.0, 0.0)
+        };
+        // The part of the segment over the grid (outside it everything is free).
+        let (mut lo, mut hi) = (0.0f64, (d - radius - self.resolution_m).max(0.0));
+        let span = [
+            (px, ux, self.origin.0, self.width),
+            (py, uy, self.origin.1, self.height),
+        ];
+        for (start, u, origin, cells) in span {
+            let (min, max) = (origin, origin + cells as f64 * self.resolution_m);
+            if u.abs() < 1e-12 {
+                if start < min || start >= max {
+                    return Some(d);
+                }
+                continue;
+            }
+            let (a, b) = ((min - start) / u, (max - start) / u);
+            lo = lo.max(a.min(b));
+            hi = hi.min(a.max(b));
+        }
+        let step = self.resolution_m / 2.0;
+        // Closed cells are forgiven within two cells of `p` until the first free one.
+        let forgiven = if lo > 0.0 {
+            -1.0
+        } else {
+            2.0 * self.resolution_m
+        };
+        let mut left_start = false;
+        let mut t = lo;
+        while t <= hi {
+            let q = WorldPoint::new(px + ux * t, py + uy * t);
+            if let Some(c) = self.cell_of(q) {
+                let closed = self.closed(c);
+                if closed && (left_start || t > forgiven) {
+                    return None;
+                }
+                left_start |= !closed;
+            }
+            t += step;
+        }
+        Some(d)
+    }
+
     /// Path length from `p` to the target of the last field, metres; `None` when no path is
     /// known or the memory changed since the field was computed. A point in a blocked cell (right at the edge of an obstacle) takes the best free
     /// cell next to it plus the straight distance to that cell's centre.
@@ -607,6 +679,51 @@ mod tests {
         // 0.5 m diagonal: 5 diagonal steps of 1.4 cells.
         let d = m.path_length_m(WorldPoint::new(0.55, 0.55)).unwrap();
         assert!((d - 0.7).abs() < 1e-9, "{d}");
+    }
+
+    #[test]
+    fn line_of_sight_is_the_straight_distance_unless_a_closed_cell_cuts_it() {
+        let mut m = ObstacleMemory::new(0.1, 0.3);
+        m.ensure_contains(WorldPoint::new(0.0, 0.0));
+        m.ensure_contains(WorldPoint::new(5.0, 2.0));
+        m.update_field(WorldPoint::new(0.05, 0.05));
+        // 3 m east and 1 m north of the target: sqrt(10) = 3.162 m in a straight line, 20
+        // straight and 10 diagonal cells (3.4 m) on the grid.
+        let p = WorldPoint::new(3.05, 1.05);
+        let d = m.line_of_sight_m(p).unwrap();
+        assert!((d - 10f64.sqrt()).abs() < 1e-9, "{d}");
+        assert!((m.path_length_m(p).unwrap() - 3.4).abs() < 1e-9);
+        // A post at (1.55, 0.55), on the line: its inflation cuts it; a post 1 m off the line
+        // does not.
+        m.add_hit(WorldPoint::new(1.55, 1.55));
+        m.update_field(WorldPoint::new(0.05, 0.05));
+        assert!((m.line_of_sight_m(p).unwrap() - 10f64.sqrt()).abs() < 1e-9);
+        m.add_hit(WorldPoint::new(1.55, 0.55));
+        assert_eq!(
+            m.line_of_sight_m(p),
+            None,
+            "the memory changed since the field"
+        );
+        m.update_field(WorldPoint::new(0.05, 0.05));
+        assert_eq!(m.line_of_sight_m(p), None);
+        // A start just inside the post's inflation (a safe end at its edge) is free until it
+        // leaves it within two cells; a line through the post is cut.
+        // (The stamp reaches 2 cells: 0.3 / 0.1 floors to 2.)
+        m.update_field(WorldPoint::new(4.05, 0.55));
+        let (east, west) = (WorldPoint::new(1.75, 0.55), WorldPoint::new(1.35, 0.55));
+        assert!(m.is_blocked(east) && m.is_blocked(west));
+        let d = m.line_of_sight_m(east).unwrap();
+        assert!((d - 2.3).abs() < 1e-9, "{d}");
+        assert_eq!(m.line_of_sight_m(west), None);
+        // A target inside the post's inflation: the inflation does not cut the line to it.
+        m.update_field(WorldPoint::new(1.75, 0.55));
+        let d = m.line_of_sight_m(WorldPoint::new(4.05, 0.55)).unwrap();
+        assert!((d - 2.3).abs() < 1e-9, "{d}");
+        // A target off the grid: the part outside the grid is free.
+        m.update_field(WorldPoint::new(5000.0, 0.55));
+        let d = m.line_of_sight_m(WorldPoint::new(3.05, 0.55)).unwrap();
+        assert!((d - 4996.95).abs() < 1e-6, "{d}");
+        assert_eq!(m.line_of_sight_m(WorldPoint::new(0.05, 0.55)), None);
     }
 
     #[test]

@@ -159,6 +159,49 @@ fn open_space_target_in_view_is_reached_straight() {
     }
 }
 
+/// Far beyond the scan's reach in the open, the grid path's 8 directions aim the leg at up to
+/// 22.5 deg off the target; ranked by the straight line where the target is in sight on the
+/// memory, the leg points at it.
+#[test]
+fn in_the_open_the_leg_points_at_a_far_target() {
+    let g = ScanGeometry::paper();
+    let scan = Scan::from_ranges(&g, &vec![4.0; g.ray_count], 0.0);
+    let clearance = vec![4.0; g.ray_count];
+    let pose = Pose2::new(0.0, 0.0, 0.0);
+    let step = g.bearing_rad(1) - g.bearing_rad(0);
+    for deg in [10.0f64, 35.0, -80.0] {
+        let a = deg.to_radians();
+        let target = WorldPoint::new(10.0 * a.cos(), 10.0 * a.sin());
+        let alpha = |line_of_sight| {
+            let mut planner = Planner::new(PlannerParams {
+                line_of_sight,
+                ..PlannerParams::default()
+            });
+            match planner.plan(&pose, &g, &scan, &clearance, target) {
+                Plan::Go {
+                    alpha_rad,
+                    target_in_view: false,
+                    travel_m,
+                    ..
+                } => {
+                    assert_eq!(travel_m, 2.0);
+                    alpha_rad
+                }
+                other => panic!("{deg} deg: {other:?}"),
+            }
+        };
+        let (sight, grid) = (alpha(true), alpha(false));
+        assert!(
+            angle_diff_rad(sight, a).abs() <= step / 2.0 + 1e-9,
+            "{deg}: {sight}"
+        );
+        assert!(
+            angle_diff_rad(grid, a).abs() > 3f64.to_radians(),
+            "{deg}: {grid}"
+        );
+    }
+}
+
 /// Why the greedy rule ranks by the distance from the safe end to the target and not by the
 /// bearing: a short wall right in front of the target. The bearing rule takes the ray
 /// pointing at the target, which is only clear for 0.5 m, and then keeps nudging into the

@@ -13,18 +13,42 @@ pub use navigator::{Method, Params};
 /// Loads a preset overridden by a TOML file. `method` on the command line wins over a
 /// `method` key in the file; without either the preset is goalseek.
 pub fn load(path: Option<&Path>, method: Option<Method>) -> anyhow::Result<Params> {
+    load_over(path, method, |_| {})
+}
+
+/// [`load`] with the preset first changed by `adjust` (a command's own defaults); the file
+/// still overrides them.
+pub fn load_over(
+    path: Option<&Path>,
+    method: Option<Method>,
+    adjust: impl Fn(&mut Params),
+) -> anyhow::Result<Params> {
     match path {
-        None => Ok(Params::preset(method.unwrap_or_default())),
+        None => {
+            let mut preset = Params::preset(method.unwrap_or_default());
+            adjust(&mut preset);
+            Ok(preset)
+        }
         Some(p) => {
             let text = std::fs::read_to_string(p)
                 .with_context(|| format!("cannot read config {}", p.display()))?;
-            from_toml_str(&text, method).with_context(|| format!("config {}", p.display()))
+            from_toml_str_over(&text, method, adjust)
+                .with_context(|| format!("config {}", p.display()))
         }
     }
 }
 
 /// Parses TOML text over the preset (see [`load`]).
 pub fn from_toml_str(text: &str, method: Option<Method>) -> anyhow::Result<Params> {
+    from_toml_str_over(text, method, |_| {})
+}
+
+/// [`from_toml_str`] over the preset changed by `adjust` (see [`load_over`]).
+pub fn from_toml_str_over(
+    text: &str,
+    method: Option<Method>,
+    adjust: impl Fn(&mut Params),
+) -> anyhow::Result<Params> {
     let user: toml::Table = toml::from_str(text)?;
     let file_method = match user.get("method") {
         None => None,
@@ -37,7 +61,8 @@ pub fn from_toml_str(text: &str, method: Option<Method>) -> anyhow::Result<Param
             line_of(text, "", "method")
         ),
     };
-    let preset = Params::preset(method.or(file_method).unwrap_or_default());
+    let mut preset = Params::preset(method.or(file_method).unwrap_or_default());
+    adjust(&mut preset);
     let mut merged = toml::Table::try_from(&preset).context("serialising the preset")?;
     merge(&mut merged, &user, "", text)?;
     // The command line's method names the preset actually used.

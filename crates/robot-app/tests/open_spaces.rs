@@ -24,10 +24,22 @@ fn run(k: u64, change: impl FnOnce(&mut Params)) -> robot_app::outputs::Summary 
         .summary
 }
 
-/// The drive and turn rules before the drive's heading prior and the skipped small turns.
+/// The drive and turn rules before the drive's heading prior and the skipped small turns, the
+/// rays ranked by their grid path alone and partial travel taken at 0.05 m.
 fn old_rules(p: &mut Params) {
     p.localiser.drive_turn_sigma_deg = 2.0;
+    p.localiser.partial_travel_max_sigma_m = 0.05;
     p.navigator.skip_turn_below_deg = 0.0;
+    p.planner.line_of_sight = false;
+}
+
+/// The median absolute final heading error over clutter worlds 0..20 (noise seed 0), degrees.
+fn median_heading_error(change: impl Fn(&mut Params)) -> f64 {
+    let mut errors: Vec<f64> = (0..20)
+        .map(|k| run(k, &change).final_heading_error_deg.unwrap().abs())
+        .collect();
+    errors.sort_by(f64::total_cmp);
+    (errors[9] + errors[10]) / 2.0
 }
 
 #[test]
@@ -76,31 +88,57 @@ fn a_straight_drive_keeps_its_heading_in_open_clutter() {
 }
 
 #[test]
+fn legs_that_see_the_target_point_at_it() {
+    // Ranked by its path on the 0.1 m grid (8 directions), a leg toward a target 17 m away aims
+    // up to 22.5 deg off it, and the next leg turns back by several degrees, mostly with
+    // nothing in range to measure the turn: each such turn keeps the base's turn error.
+    // Ranked by the straight line wherever the target is in sight on the planner's map, the
+    // legs point at it and fewer turns are made. Over clutter worlds 0..20 (noise seed 0) the
+    // median final heading error is lower (measured: about half).
+    let grid = median_heading_error(|p| p.planner.line_of_sight = false);
+    let sight = median_heading_error(|p| p.planner.line_of_sight = true);
+    assert!(
+        sight < 0.75 * grid,
+        "median heading error {sight:.2} deg in sight, {grid:.2} deg on the grid path"
+    );
+}
+
+#[test]
 fn a_drive_match_weighs_its_heading_against_a_straight_drive() {
     // The simulator's base never turns while driving, so every heading change a drive's match
     // puts into the estimate is error. Weighed against the matcher's own 2 deg prior, a match
     // on a few posts still turns the estimate by tenths of a degree per metre; against the
     // drive's own 0.1 deg the heading is held unless the scans pin it harder. Over clutter
-    // worlds 0..20 (noise seed 0, every turn made in both) the median final heading error is
-    // lower.
-    let median_heading_error = |sigma_deg: f64| {
-        let mut errors: Vec<f64> = (0..20)
-            .map(|k| {
-                let s = run(k, |p| {
-                    p.localiser.drive_turn_sigma_deg = sigma_deg;
-                    p.navigator.skip_turn_below_deg = 0.0;
-                });
-                s.final_heading_error_deg.unwrap().abs()
-            })
-            .collect();
-        errors.sort_by(f64::total_cmp);
-        (errors[9] + errors[10]) / 2.0
+    // worlds 0..20 (noise seed 0, every turn made in both, rays ranked by their grid path) the
+    // median final heading error is lower.
+    let median = |sigma_deg: f64| {
+        median_heading_error(|p| {
+            p.localiser.drive_turn_sigma_deg = sigma_deg;
+            p.navigator.skip_turn_below_deg = 0.0;
+            p.planner.line_of_sight = false;
+        })
     };
-    let loose = median_heading_error(2.0);
-    let tight = median_heading_error(0.1);
+    let loose = median(2.0);
+    let tight = median(0.1);
     // A quarter lower at least (half, when measured).
     assert!(
         tight < 0.75 * loose,
         "median heading error {tight:.2} deg with 0.1 deg, {loose:.2} deg with 2 deg"
     );
+}
+
+#[test]
+fn a_partial_travel_match_must_pin_the_travel() {
+    // Clutter world 11, noise seed 0 (found in the 200-run batch): in one 1 m drive the match
+    // at the commanded travel fails (too few pairs), and the partial-travel hypothesis that
+    // a stalled base needs lands on 0.39 m among a few posts, its travel known to 0.04 m only.
+    // The estimate falls 0.6 m behind, and the run claims arrival 0.64 m from the target.
+    // Believed only when the data pin the travel to 0.02 m, the command stands and the run
+    // arrives. (A stalled base is still seen: `tests/base_faults.rs`.)
+    let loose = run(11, |p| p.localiser.partial_travel_max_sigma_m = 0.05);
+    assert_eq!(loose.reason, Reason::FalseArrival, "{}", loose.note);
+    assert!(loose.goal_distance_m.unwrap() > 0.5);
+    let tight = run(11, |p| p.localiser.partial_travel_max_sigma_m = 0.02);
+    assert!(tight.reached, "{}", tight.note);
+    assert!(tight.goal_distance_m.unwrap() <= 0.3);
 }

@@ -64,6 +64,11 @@ impl LoopOptions {
         crate::config::load(self.config.as_deref(), self.method)
     }
 
+    /// [`LoopOptions::load`] over the preset changed by a command's own defaults.
+    pub fn load_over(&self, adjust: impl Fn(&mut Params)) -> anyhow::Result<Params> {
+        crate::config::load_over(self.config.as_deref(), self.method, adjust)
+    }
+
     /// The file to record to: `--record`'s, or `OUT/run.mcap` with `--slam-map`.
     pub fn record_path(&self) -> Option<PathBuf> {
         self.record
