@@ -279,7 +279,7 @@ fn revisits_keep_the_map_of_simple_rooms_accurate() {
 }
 
 /// Exploring starts from the preset with the planner's line of sight off; a `--config` file
-/// still sets it, and every other key keeps the preset's value.
+/// still sets it, and a file that sets other keys leaves it off.
 #[test]
 fn explore_defaults_sit_under_the_config_file() {
     use robot_app::cmd::explore::explore_defaults;
@@ -290,6 +290,8 @@ fn explore_defaults_sit_under_the_config_file() {
     assert_eq!(bare, expected);
     let on = from_toml_str_over("[planner]\nline_of_sight = true\n", None, explore_defaults);
     assert_eq!(on.unwrap(), Params::goalseek());
-    let paper = from_toml_str_over("method = \"paper\"\n", None, explore_defaults).unwrap();
-    assert_eq!(paper, Params::paper());
+    let other = from_toml_str_over("[planner]\nmin_travel_m = 0.4\n", None, explore_defaults);
+    let mut expected_other = expected.clone();
+    expected_other.planner.min_travel_m = 0.4;
+    assert_eq!(other.unwrap(), expected_other);
 }

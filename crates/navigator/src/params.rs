@@ -190,7 +190,7 @@ pub struct LocaliserParams {
     pub drive_turn_sigma_deg: f64,
     /// A drive's match that puts the travel at a share of the command (a base that stalled or
     /// slipped) replaces the command only when its data pin the travel this well, metres (one
-    /// standard deviation).
+    /// standard deviation; 0: never).
     #[serde(default = "loose_partial_travel_sigma")]
     pub partial_travel_max_sigma_m: f64,
     /// Online SLAM: every turn chunk's scan, every `slam_step_m` of a drive and every leg's

@@ -731,8 +731,8 @@ impl Planner {
         self.judge_gaps(&too_narrow, &wide_enough);
     }
 
-    /// The path length from `end` to the target on the memory, or its straight-line distance
-    /// when it sees the target and [`PlannerParams::line_of_sight`] is on, metres.
+    /// The path length from `end` to the target on the memory, metres: the smaller of the
+    /// grid path and the line of sight when [`PlannerParams::line_of_sight`] is on.
     fn to_go_m(&self, end: WorldPoint) -> Option<f64> {
         let path = self.memory.path_length_m(end);
         if !self.params.line_of_sight {

@@ -358,6 +358,8 @@ impl ObstacleMemory {
             ((x - self.origin.0) / self.resolution_m).floor() as i64,
             ((y - self.origin.1) / self.resolution_m).floor() as i64,
         );
+        // The field is kept for a target that moved within its cell; distances go to the new one.
+        self.field_target = (x, y);
         if self.field_key == Some((self.version, key_cell)) {
             return false;
         }
@@ -378,7 +380,6 @@ impl ObstacleMemory {
         }
         self.wavefront();
         self.field_key = Some((self.version, key_cell));
-        self.field_target = (x, y);
         true
     }
 
@@ -557,13 +558,14 @@ impl ObstacleMemory {
         }
     }
 
-    /// Straight-line distance from `p` to the last field's target when the segment between
-    /// them crosses no cell the field counts closed, metres; `None` otherwise, or when the
-    /// memory changed since the field was computed.
+    /// Straight-line distance to the last field's target from `p` when in sight of it, metres.
     ///
-    /// Closed cells within two cells of `p` before the line's first free one (a safe end right
-    /// at an obstacle's edge) and within the inflation of the target (a target next to a
-    /// wall) do not count, as in the field.
+    /// `None` when the segment crosses a cell the field counts closed, or when the memory
+    /// changed since the field was computed. Closed cells within two cells of `p` before the
+    /// line's first free one (a safe end right at an obstacle's edge) and the last inflation
+    /// radius plus one cell before the target (a target next to a wall) do not count; the
+    /// line off the grid is free. When the field runs through the band, each metre in it
+    /// costs `BAND_FACTOR` times as much, as in the field.
     pub fn line_of_sight_m(&self, p: WorldPoint) -> Option<f64> {
         if self.field_key.map(|k| k.0) != Some(self.version) {
             return None;
@@ -610,8 +612,14 @@ impl ObstacleMemory {
             2.0 * self.resolution_m
         };
         let mut left_start = false;
+        let mut band_m = 0.0;
         let mut t = lo;
-        while t <= hi {
+        // Bounded by the samples too: far from the grid `t += step` may not move `t`.
+        let samples = ((hi - lo) / step).max(0.0).ceil() as usize + 1;
+        for _ in 0..samples {
+            if t > hi {
+                break;
+            }
             let q = WorldPoint::new(px + ux * t, py + uy * t);
             if let Some(c) = self.cell_of(q) {
                 let closed = self.closed(c);
@@ -619,10 +627,13 @@ impl ObstacleMemory {
                     return None;
                 }
                 left_start |= !closed;
+                if self.through_band && !closed && self.near[c] > 0 {
+                    band_m += step;
+                }
             }
             t += step;
         }
-        Some(d)
+        Some(d + f64::from(BAND_FACTOR - 1) * band_m)
     }
 
     /// Path length from `p` to the target of the last field, metres; `None` when no path is
@@ -724,6 +735,24 @@ mod tests {
         let d = m.line_of_sight_m(WorldPoint::new(3.05, 0.55)).unwrap();
         assert!((d - 4996.95).abs() < 1e-6, "{d}");
         assert_eq!(m.line_of_sight_m(WorldPoint::new(0.05, 0.55)), None);
+    }
+
+    #[test]
+    fn line_of_sight_through_the_band_costs_as_the_field_does() {
+        // Lethal within 0.2 m, band to 0.4 m: a line 0.3 m from a hit passes through 5 band
+        // cells (|dx| <= 2 at dy = 3: sqrt(4 + 9) x 0.1 = 0.36 m), 0.5 m, each metre of it
+        // costing 3 times: 3 m + 2 x 0.5 m.
+        let mut m = ObstacleMemory::graded(0.1, 0.2, 0.4);
+        m.ensure_contains(WorldPoint::new(0.0, 0.0));
+        m.ensure_contains(WorldPoint::new(4.0, 1.0));
+        m.add_hit(WorldPoint::new(1.55, 0.55));
+        let (from, target) = (WorldPoint::new(3.05, 0.85), WorldPoint::new(0.05, 0.85));
+        m.update_field_through(target, true);
+        let d = m.line_of_sight_m(from).unwrap();
+        assert!((d - 4.0).abs() <= 0.1 + 1e-9, "{d}");
+        // With the band closed the line is cut.
+        m.update_field_through(target, false);
+        assert_eq!(m.line_of_sight_m(from), None);
     }
 
     #[test]
