@@ -632,11 +632,14 @@ impl Planner {
             let u = dirs[c.ray];
             pose.transform_point(RobotPoint::new(c.travel * u[0], c.travel * u[1]))
         };
-        let mut order: Vec<(f64, usize)> = self
+        let mut order: Vec<(f64, usize, WorldPoint)> = self
             .candidates
             .iter()
             .enumerate()
-            .map(|(k, c)| (end(c).distance_m(&target), k))
+            .map(|(k, c)| {
+                let e = end(c);
+                (e.distance_m(&target), k, e)
+            })
             .collect();
         order.sort_by(|a, b| a.0.total_cmp(&b.0));
         let mut best = self
@@ -644,11 +647,11 @@ impl Planner {
             .iter()
             .map(|c| c.score)
             .fold(f64::INFINITY, f64::min);
-        for (straight, k) in order {
+        for (straight, k, e) in order {
             if straight >= best {
                 break;
             }
-            if let Some(d) = self.memory.line_of_sight_m(end(&self.candidates[k])) {
+            if let Some(d) = self.memory.line_of_sight_m(e) {
                 self.candidates[k].score = d;
                 best = best.min(d);
             }
@@ -734,14 +737,16 @@ impl Planner {
     /// The path length from `end` to the target on the memory, metres: the smaller of the
     /// grid path and the line of sight when [`PlannerParams::line_of_sight`] is on.
     fn to_go_m(&self, end: WorldPoint) -> Option<f64> {
-        let path = self.memory.path_length_m(end);
-        if !self.params.line_of_sight {
-            return path;
-        }
-        match (path, self.memory.line_of_sight_m(end)) {
-            (Some(p), Some(l)) => Some(p.min(l)),
-            (p, l) => p.or(l),
-        }
+        let sight = if self.params.line_of_sight {
+            self.memory.line_of_sight_m(end)
+        } else {
+            None
+        };
+        self.memory
+            .path_length_m(end)
+            .into_iter()
+            .chain(sight)
+            .reduce(f64::min)
     }
 
     /// Counts the plans in which a gap was measured too narrow (and never wide enough); after
