@@ -115,10 +115,12 @@ fn the_paper_world_is_explored_without_a_goal() {
     );
     assert!(s["coverage_share"].as_f64().unwrap() >= 0.95, "{s}");
     assert!(s["map_accuracy_share"].as_f64().unwrap() >= 0.98, "{s}");
-    // Exploring's own default: the planner's line of sight off (goal seeking's preset has it).
+    // Exploring's own defaults: the planner's line of sight and the travel on a round
+    // landmark's centre off (goal seeking's preset has them).
     let used = robot_app::config::load(Some(&out.join("config.toml")), None).unwrap();
-    assert!(!used.planner.line_of_sight);
-    assert!(robot_app::config::Params::goalseek().planner.line_of_sight);
+    assert!(!used.planner.line_of_sight && !used.tracking.round_centre);
+    let goalseek = robot_app::config::Params::goalseek();
+    assert!(goalseek.planner.line_of_sight && goalseek.tracking.round_centre);
     // No --slam-map: no SLAM map to score.
     assert!(s["slam_map_coverage_share"].is_null(), "{s}");
     assert!(s["slam_map_accuracy_share"].is_null(), "{s}");
@@ -287,8 +289,13 @@ fn explore_defaults_sit_under_the_config_file() {
     let bare = load_over(None, None, explore_defaults).unwrap();
     let mut expected = Params::goalseek();
     expected.planner.line_of_sight = false;
+    expected.tracking.round_centre = false;
     assert_eq!(bare, expected);
-    let on = from_toml_str_over("[planner]\nline_of_sight = true\n", None, explore_defaults);
+    let on = from_toml_str_over(
+        "[planner]\nline_of_sight = true\n[tracking]\nround_centre = true\n",
+        None,
+        explore_defaults,
+    );
     assert_eq!(on.unwrap(), Params::goalseek());
     let other = from_toml_str_over("[planner]\nmin_travel_m = 0.4\n", None, explore_defaults);
     let mut expected_other = expected.clone();

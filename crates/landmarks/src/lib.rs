@@ -29,12 +29,14 @@
 
 mod detect;
 mod error;
+mod round;
 mod select;
 mod stats;
 mod track;
 
 pub use detect::{DetectParams, Landmark, LandmarkKind, OpenSide, detect, detect_near};
 pub use error::LandmarksError;
+pub use round::{Circle, RoundParams, round_centre, round_object};
 pub use select::{SelectParams, select, select_nearest};
 pub use stats::{LandmarkCounts, count_log, count_scan};
 pub use track::{TrackParams, TrackUpdate, Tracker};

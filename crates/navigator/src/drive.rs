@@ -1,9 +1,9 @@
 //! One leg driven in steps: the landmark tracked, the travel measured on it and refined by
 //! scan matching against keyframes.
 
-use landmarks::{Landmark, TrackUpdate, Tracker};
+use landmarks::{Circle, Landmark, RoundParams, TrackUpdate, Tracker, round_centre, round_object};
 use localiser::{MatchParams, MatchTarget};
-use scan_types::{Pose2, Scan, WorldPoint};
+use scan_types::{Pose2, Scan, ScanGeometry, WorldPoint};
 
 use crate::{Navigator, TravelRule};
 
@@ -47,6 +47,9 @@ pub(crate) struct Drive {
     tracker: Option<Tracker>,
     /// The landmark's distance ahead at the start (OB).
     ob0: Option<f64>,
+    /// `[tracking] round_centre`: the landmark's object, followed by its centre once it
+    /// proves round.
+    round: Option<RoundTrack>,
     match_params: MatchParams,
     /// The reference scan for matching: its pose relative to the start of the drive, the
     /// measured travel there, and the scan.
@@ -102,6 +105,9 @@ impl Drive {
             stop_at_side: matches!(kind, LegKind::ToB { .. }),
             tracker: landmark.map(|l| Tracker::new(l, nav.track_params)),
             ob0: landmark.map(|l| l.range_m * l.bearing_rad.cos()),
+            round: landmark
+                .filter(|_| nav.params.tracking.round_centre)
+                .map(|l| RoundTrack::new(&nav.geometry, l, &scan)),
             match_params,
             key,
             commanded_m: 0.0,
@@ -118,11 +124,16 @@ impl Drive {
             .map_or(self.commanded_m, |(m, c)| m + self.commanded_m - c)
     }
 
+    /// The landmark's distance ahead at the start: its centre's once the object proved round.
+    fn ob(&self) -> Option<f64> {
+        self.round.as_ref().and_then(|r| r.ob_m).or(self.ob0)
+    }
+
     /// What is left of the leg as planned: to B when the landmark gives its distance (the
     /// drive stops there), else to the limit, metres.
     pub(crate) fn remaining_m(&self) -> f64 {
         let to_limit = self.limit_m - self.commanded_m;
-        match (self.stop_at_side, self.ob0) {
+        match (self.stop_at_side, self.ob()) {
             (true, Some(ob)) => (ob - self.measured_m()).min(to_limit),
             _ => to_limit,
         }
@@ -136,7 +147,7 @@ impl Drive {
             return None;
         }
         // Aim the last step at B itself when the landmark gives its distance.
-        let to_go = match (self.stop_at_side, self.ob0) {
+        let to_go = match (self.stop_at_side, self.ob()) {
             (true, Some(ob)) => (ob - self.measured_m()).max(0.01),
             _ => limit - commanded,
         };
@@ -154,8 +165,20 @@ impl Drive {
             .map(|t| t.update(&nav.geometry, scan, self.commanded_m));
         match update {
             Some(TrackUpdate::Tracked(l)) => {
-                let measured = self.ob0.unwrap_or(0.0) - l.range_m * l.bearing_rad.cos();
-                self.fix = Some((measured, self.commanded_m));
+                let centre = self
+                    .round
+                    .as_mut()
+                    .map_or(Centre::Unknown, |r| r.travel(&nav.geometry, scan, &l));
+                let measured = match centre {
+                    Centre::Unknown => {
+                        Some(self.ob0.unwrap_or(0.0) - l.range_m * l.bearing_rad.cos())
+                    }
+                    Centre::Missed => None,
+                    Centre::Travel(m) => Some(m),
+                };
+                if let Some(m) = measured {
+                    self.fix = Some((m, self.commanded_m));
+                }
                 let side = SIDE_RAD - 0.5 * nav.geometry.increment_rad.abs();
                 if self.stop_at_side && l.bearing_rad.abs() >= side {
                     return false;
@@ -206,6 +229,101 @@ impl Drive {
             }
         }
     }
+}
+
+/// A round landmark's object: the start's landmark and scan, and once a scan shows the object
+/// round, its radius and the centre's distance ahead at the start.
+struct RoundTrack {
+    start: Landmark,
+    start_scan: Scan,
+    radius_m: Option<f64>,
+    ob_m: Option<f64>,
+    /// The start scan's hits do not fit the circle: the edge it is, for this leg.
+    failed: bool,
+    params: RoundParams,
+}
+
+/// What one scan says of the travel on a round landmark's centre.
+enum Centre {
+    /// Not known round: measure on the edge.
+    Unknown,
+    /// Known round, but this scan's hits do not fit it: no fix from this scan.
+    Missed,
+    /// The travel measured on the centre, metres.
+    Travel(f64),
+}
+
+impl RoundTrack {
+    fn new(geometry: &ScanGeometry, start: Landmark, scan: &Scan) -> Self {
+        let params = RoundParams::default();
+        let circle = round_object(geometry, scan, &start, &params);
+        circle.iter().for_each(log_round);
+        Self {
+            start,
+            start_scan: scan.clone(),
+            radius_m: circle.map(|c| c.radius_m),
+            ob_m: circle.map(|c| c.centre.x_m()),
+            failed: false,
+            params,
+        }
+    }
+
+    /// The travel measured on the centre of the object seen as `l` in `scan`.
+    fn travel(&mut self, geometry: &ScanGeometry, scan: &Scan, l: &Landmark) -> Centre {
+        if self.failed {
+            return Centre::Unknown;
+        }
+        let radius = match self.radius_m {
+            Some(r) => r,
+            None => match round_object(geometry, scan, l, &self.params) {
+                Some(c) => {
+                    log_round(&c);
+                    *self.radius_m.insert(c.radius_m)
+                }
+                None => return Centre::Unknown,
+            },
+        };
+        let ob = match self.ob_m {
+            Some(ob) => ob,
+            None => {
+                match round_centre(
+                    geometry,
+                    &self.start_scan,
+                    &self.start,
+                    radius,
+                    &self.params,
+                ) {
+                    Some(c) => *self.ob_m.insert(c.centre.x_m()),
+                    None => {
+                        self.failed = true;
+                        return Centre::Unknown;
+                    }
+                }
+            }
+        };
+        match round_centre(geometry, scan, l, radius, &self.params) {
+            Some(c) => {
+                let edge = self.start.range_m * self.start.bearing_rad.cos()
+                    - l.range_m * l.bearing_rad.cos();
+                tracing::trace!(
+                    centre_m = ob - c.centre.x_m(),
+                    edge_m = edge,
+                    "travel on a round object's centre"
+                );
+                Centre::Travel(ob - c.centre.x_m())
+            }
+            None => Centre::Missed,
+        }
+    }
+}
+
+fn log_round(c: &Circle) {
+    tracing::debug!(
+        radius_m = c.radius_m,
+        rms_m = c.rms_m,
+        points = c.points,
+        "landmark on a round object"
+    );
 }
 
 /// The pose of `scan` relative to the start of the drive: matched against `target` (the

@@ -154,6 +154,10 @@ pub struct TrackingParams {
     pub gate_m: f64,
     /// Scans in a row the landmark may be missed before it counts as lost.
     pub max_missed_scans: usize,
+    /// On a round object, measure the travel on its fitted centre, not on the edge hit that
+    /// slides around it (a configuration without the key, made before it: the edge).
+    #[serde(default)]
+    pub round_centre: bool,
 }
 
 /// Localisation.
@@ -527,6 +531,7 @@ impl Params {
                 step_m: 0.05,
                 gate_m: 0.06,
                 max_missed_scans: 3,
+                round_centre: true,
             },
             localiser: LocaliserParams {
                 heading_rule: HeadingRule::ScanMatched,
@@ -599,6 +604,7 @@ impl Params {
         c.planner.line_of_sight = false;
         c.landmarks.range_limit_margin_m = 0.0;
         c.tracking.gate_m = 0.2;
+        c.tracking.round_centre = false;
         c.localiser.heading_rule = HeadingRule::Commanded;
         c.localiser.travel_rule = TravelRule::Landmark;
         c.localiser.revisit = false;
@@ -832,6 +838,10 @@ mod tests {
             .as_object_mut()
             .unwrap()
             .remove("line_of_sight");
+        stored["tracking"]
+            .as_object_mut()
+            .unwrap()
+            .remove("round_centre");
         let old: Params = serde_json::from_value(stored).unwrap();
         // The matcher's own heading prior (2 deg), every turn made.
         assert_eq!(old.localiser.drive_turn_sigma_deg, 2.0);
@@ -840,12 +850,15 @@ mod tests {
         assert_eq!(old.navigator.skip_turn_max_hits, 60);
         // The grid path alone ranks the rays.
         assert!(!old.planner.line_of_sight && !old.planner_params().line_of_sight);
+        // Travel measured on a landmark's edge hit.
+        assert!(!old.tracking.round_centre);
         assert!(old.validate().is_ok());
         let mut back = old;
         back.localiser.drive_turn_sigma_deg = g.localiser.drive_turn_sigma_deg;
         back.localiser.partial_travel_max_sigma_m = 0.02;
         back.navigator.skip_turn_below_deg = g.navigator.skip_turn_below_deg;
         back.planner.line_of_sight = true;
+        back.tracking.round_centre = true;
         assert_eq!(back, g);
     }
 

@@ -163,11 +163,12 @@ struct Explored {
     recorded: anyhow::Result<()>,
 }
 
-/// Exploring's own defaults over the method's preset: the planner's line of sight off (the
-/// frontiers are near; measured no better for exploring, `docs/explore.md`). A `--config`
-/// file may still turn it on.
+/// Exploring's own defaults over the method's preset: the planner's line of sight and the
+/// travel on a round landmark's centre off (measured no better for exploring,
+/// `docs/explore.md`). A `--config` file may still turn them on.
 pub fn explore_defaults(p: &mut crate::config::Params) {
     p.planner.line_of_sight = false;
+    p.tracking.round_centre = false;
 }
 
 /// Runs `robot-app explore`: in the simulator, or with `--port` on a real Hokuyo and base.
