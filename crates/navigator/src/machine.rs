@@ -658,8 +658,18 @@ impl Navigator {
             HeadingRule::ScanMatched => {
                 let m = measured();
                 let guess = m.unwrap_or(chunk);
-                self.rotation_matched(&turn.before, after, guess)
-                    .map_or((guess, m.is_some()), |r| (r, true))
+                let r = self.rotation_matched(&turn.before, after, guess);
+                tracing::debug!(
+                    chunk_deg = chunk.to_degrees(),
+                    ray_shift_deg = m.map(f64::to_degrees),
+                    matched_deg = r.map(f64::to_degrees),
+                    "turn measured"
+                );
+                match (r, m) {
+                    (Some(r), _) => (r, true),
+                    (None, Some(m)) if self.ray_shift_alone_fits(m, chunk) => (m, true),
+                    (None, _) => (chunk, false),
+                }
             }
         };
         let rotated = self.estimate.rotated(turned);
@@ -693,6 +703,27 @@ impl Navigator {
                 narrow,
             } => self.start_leg(turn.before, travel_m, target_in_view, narrow),
         }
+    }
+
+    /// Whether a turn chunk measured by the ray shift alone lies close enough to the command
+    /// (`[localiser] ray_shift_max_sigmas`): unconfirmed by the scan match, a shift several
+    /// turn sigmas off is more likely a wrong alignment than the base's error.
+    fn ray_shift_alone_fits(&self, measured_rad: f64, chunk_rad: f64) -> bool {
+        let l = &self.params.localiser;
+        if l.ray_shift_max_sigmas == 0.0 {
+            return true;
+        }
+        let allowed =
+            (l.ray_shift_max_sigmas * l.turn_sigma_deg.to_radians()).max(0.05 * chunk_rad.abs());
+        let fits = (measured_rad - chunk_rad).abs() <= allowed;
+        if !fits {
+            tracing::debug!(
+                chunk_deg = chunk_rad.to_degrees(),
+                ray_shift_deg = measured_rad.to_degrees(),
+                "ray shift alone too far from the command; using the command"
+            );
+        }
+        fits
     }
 
     /// The rotation in place between `before` and `after` by scan matching, starting from

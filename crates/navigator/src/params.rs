@@ -197,6 +197,11 @@ pub struct LocaliserParams {
     /// standard deviation; 0: never).
     #[serde(default = "loose_partial_travel_sigma")]
     pub partial_travel_max_sigma_m: f64,
+    /// A turn measured by the ray shift alone (the scan match refused it) counts only within
+    /// this many `turn_sigma_deg`, or 5 % of the turn if more, of the command; beyond, the
+    /// command stands (0: always counts, as a configuration without the key).
+    #[serde(default)]
+    pub ray_shift_max_sigmas: f64,
     /// Online SLAM: every turn chunk's scan, every `slam_step_m` of a drive and every leg's
     /// last scan are placed against a submap of recent keyframes by the slam crate's
     /// correlative scan-to-submap matching, searched around the pose the rules above give;
@@ -546,6 +551,7 @@ impl Params {
                 drive_max_turn_deg: default_drive_max_turn_deg(),
                 drive_turn_sigma_deg: default_drive_turn_sigma_deg(),
                 partial_travel_max_sigma_m: default_partial_travel_max_sigma_m(),
+                ray_shift_max_sigmas: 3.0,
                 slam: false,
                 slam_window_m: default_slam_window_m(),
                 slam_window_deg: default_slam_window_deg(),
@@ -693,6 +699,7 @@ impl Params {
             ("localiser.drive_max_turn_deg", z.drive_max_turn_deg, 0.0, 180.0, true),
             ("localiser.drive_turn_sigma_deg", z.drive_turn_sigma_deg, 0.001, 90.0, false),
             ("localiser.partial_travel_max_sigma_m", z.partial_travel_max_sigma_m, 0.0, 1.0, false),
+            ("localiser.ray_shift_max_sigmas", z.ray_shift_max_sigmas, 0.0, 100.0, false),
             ("localiser.slam_window_m", z.slam_window_m, 0.0, 1.6, true),
             ("localiser.slam_window_deg", z.slam_window_deg, 0.0, 90.0, true),
             ("localiser.slam_step_m", z.slam_step_m, 0.0, 10.0, true),
@@ -831,6 +838,10 @@ mod tests {
             .as_object_mut()
             .unwrap()
             .remove("partial_travel_max_sigma_m");
+        stored["localiser"]
+            .as_object_mut()
+            .unwrap()
+            .remove("ray_shift_max_sigmas");
         let n = stored["navigator"].as_object_mut().unwrap();
         n.remove("skip_turn_below_deg");
         n.remove("skip_turn_max_hits");
@@ -846,6 +857,8 @@ mod tests {
         // The matcher's own heading prior (2 deg), every turn made.
         assert_eq!(old.localiser.drive_turn_sigma_deg, 2.0);
         assert_eq!(old.localiser.partial_travel_max_sigma_m, 0.05);
+        // Every ray shift counts.
+        assert_eq!(old.localiser.ray_shift_max_sigmas, 0.0);
         assert_eq!(old.navigator.skip_turn_below_deg, 0.0);
         assert_eq!(old.navigator.skip_turn_max_hits, 60);
         // The grid path alone ranks the rays.
@@ -856,6 +869,7 @@ mod tests {
         let mut back = old;
         back.localiser.drive_turn_sigma_deg = g.localiser.drive_turn_sigma_deg;
         back.localiser.partial_travel_max_sigma_m = 0.02;
+        back.localiser.ray_shift_max_sigmas = 3.0;
         back.navigator.skip_turn_below_deg = g.navigator.skip_turn_below_deg;
         back.planner.line_of_sight = true;
         back.tracking.round_centre = true;
