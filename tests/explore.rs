@@ -115,12 +115,14 @@ fn the_paper_world_is_explored_without_a_goal() {
     );
     assert!(s["coverage_share"].as_f64().unwrap() >= 0.95, "{s}");
     assert!(s["map_accuracy_share"].as_f64().unwrap() >= 0.98, "{s}");
-    // Exploring's own defaults: the planner's line of sight and the travel on a round
-    // landmark's centre off (goal seeking's preset has them).
+    // Exploring's own defaults: the planner's line of sight, the travel on a round landmark's
+    // centre and the tracker's range-limit rule off (goal seeking's preset has them).
     let used = robot_app::config::load(Some(&out.join("config.toml")), None).unwrap();
-    assert!(!used.planner.line_of_sight && !used.tracking.round_centre);
+    let t = &used.tracking;
+    assert!(!used.planner.line_of_sight && !t.round_centre && !t.reject_near_range_limit);
     let goalseek = robot_app::config::Params::goalseek();
-    assert!(goalseek.planner.line_of_sight && goalseek.tracking.round_centre);
+    let t = &goalseek.tracking;
+    assert!(goalseek.planner.line_of_sight && t.round_centre && t.reject_near_range_limit);
     // No --slam-map: no SLAM map to score.
     assert!(s["slam_map_coverage_share"].is_null(), "{s}");
     assert!(s["slam_map_accuracy_share"].is_null(), "{s}");
@@ -280,8 +282,8 @@ fn revisits_keep_the_map_of_simple_rooms_accurate() {
     );
 }
 
-/// Exploring starts from the preset with the planner's line of sight off; a `--config` file
-/// still sets it, and a file that sets other keys leaves it off.
+/// Exploring starts from the preset with the planner's line of sight and two tracking rules
+/// off; a `--config` file still sets them, and a file that sets other keys leaves them off.
 #[test]
 fn explore_defaults_sit_under_the_config_file() {
     use robot_app::cmd::explore::explore_defaults;
@@ -290,9 +292,11 @@ fn explore_defaults_sit_under_the_config_file() {
     let mut expected = Params::goalseek();
     expected.planner.line_of_sight = false;
     expected.tracking.round_centre = false;
+    expected.tracking.reject_near_range_limit = false;
     assert_eq!(bare, expected);
     let on = from_toml_str_over(
-        "[planner]\nline_of_sight = true\n[tracking]\nround_centre = true\n",
+        "[planner]\nline_of_sight = true\n[tracking]\nround_centre = true\n\
+         reject_near_range_limit = true\n",
         None,
         explore_defaults,
     );

@@ -7,7 +7,9 @@
 //! occlusion edges (a range jump between two hits; the nearer, occluding edge is the landmark)
 //! and corners (two straight arms meeting at an angle), and flags what moves with the robot:
 //! hits within a few centimetres of the maximum range, and surfaces that simply continue past
-//! the edge (a wall running out of range or seen at a grazing angle).
+//! the edge (a wall running out of range or seen at a grazing angle). An edge on a post or
+//! pillar can be fitted to its round object's centre ([`round_object`], [`round_centre`]),
+//! which stays put while the edge hit slides round it.
 //!
 //! Every rule is a field of [`DetectParams`]; [`DetectParams::paper`] is the paper as
 //! written, [`DetectParams::default`] is goalseek's choice. See `docs/landmarks.md`.

@@ -1,7 +1,8 @@
 //! Round objects: the centre of the post or pillar whose edge a landmark is.
 //!
 //! Where the rays graze a round object, the edge hit slides around it as the robot passes, so
-//! a travel measured on that hit comes out short by up to the radius. The centre stays put.
+//! a travel measured on that hit comes out short or long by up to the radius. The centre stays
+//! put.
 
 use scan_types::{RobotPoint, Scan, ScanGeometry};
 
@@ -350,7 +351,7 @@ mod tests {
         let g = ScanGeometry::paper();
         let post = disc(3.0, 1.0, 0.15);
         let p = RoundParams::default();
-        // The right-hand edge's along-track distance, from x = 0 and from x = 2.
+        // Both edges' along-track distances (right-hand first), from x = 0 and from x = 2.
         let mut edge_x = Vec::new();
         for x in [0.0, 2.0] {
             let scan = scan_at(&g, &post, x, 0.0, 0.0);
@@ -368,12 +369,20 @@ mod tests {
                 let k = round_centre(&g, &scan, l, 0.15, &p).expect("centre");
                 assert!((k.centre.x_m() - (3.0 - x)).abs() < 1e-3, "{k:?}");
             }
-            edge_x.push(found[0].robot_point().x_m());
+            let mut xs: Vec<(f64, f64)> = found
+                .iter()
+                .map(|l| (l.bearing_rad, l.robot_point().x_m()))
+                .collect();
+            xs.sort_by(|a, b| a.0.total_cmp(&b.0));
+            edge_x.push([xs[0].1, xs[1].1]);
         }
-        // The tangent point from the origin lies at x = 3.041 and from x = 2 at x = 1.094
-        // (sqrt(d^2 - r^2) cos(atan2(cy, cx) - asin(r / d))): 2 m driven, 1.946 m measured.
-        let slide = 2.0 - (edge_x[0] - edge_x[1]);
-        assert!(slide > 0.03, "edge travel short by {slide}");
+        // Tangent points at x = sqrt(d^2 - r^2) cos(atan2(cy, cx) -+ asin(r / d)): from the
+        // origin 3.041 and 2.946, from x = 2 1.094 and 0.883. For 2 m driven the right-hand
+        // edge measures 1.946 m, the left-hand 2.063 m.
+        let short = 2.0 - (edge_x[0][0] - edge_x[1][0]);
+        assert!(short > 0.03, "right-hand edge's travel short by {short}");
+        let long = (edge_x[0][1] - edge_x[1][1]) - 2.0;
+        assert!(long > 0.03, "left-hand edge's travel long by {long}");
     }
 
     #[test]
@@ -407,16 +416,18 @@ mod tests {
         for seed in 1..=20 {
             // 2 cm: the URG-04LX's 1 % of the post's 2.1 m range.
             let scan = noisy(&g, &clean, 0.021, seed);
-            for l in edges_near(&g, &scan, [2.0, 0.6], 0.3) {
+            let found = edges_near(&g, &scan, [2.0, 0.6], 0.3);
+            assert_eq!(found.len(), 2, "seed {seed}: {found:#?}");
+            for l in found {
                 let c = round_centre(&g, &scan, &l, 0.15, &p).unwrap_or_else(|| {
                     panic!("seed {seed}: {l:?} {:?}", object_hits(&g, &scan, &l, &p))
                 });
+                // The post spans 2 asin(0.15 / 2.09) = 8.2 deg, about 23 rays at 0.35 deg.
+                assert!((20..=25).contains(&c.points), "seed {seed}: {c:?}");
+                // n hits of 2.1 cm noise: within 2.1 / sqrt(n) cm per axis, 3 sigma.
                 let off = (c.centre.x_m() - 2.0).hypot(c.centre.y_m() - 0.6);
-                // 33 hits of 2.1 cm noise: within 2.1 / sqrt(33) cm per axis, 3 sigma.
-                assert!(
-                    off < 3.0 * 0.021 / 33f64.sqrt() * 2f64.sqrt(),
-                    "seed {seed}: {off}"
-                );
+                let n = c.points as f64;
+                assert!(off < 3.0 * 0.021 * (2.0 / n).sqrt(), "seed {seed}: {off}");
             }
         }
         // Near, where the arc bends well clear of the 1 cm noise, it is recognised every time.

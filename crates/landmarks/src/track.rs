@@ -20,6 +20,9 @@ pub struct TrackParams {
     /// When no feature lies in the gate, accept the nearest plain hit point within half the
     /// gate (an edge turning into a corner as the robot passes it).
     pub point_fallback: bool,
+    /// Re-identify nothing within `detect.range_limit_margin_m` of the maximum range: there
+    /// the last hit of a surface running out of range moves with the robot.
+    pub reject_near_range_limit: bool,
     /// Detection rules for re-identification (their `permissive()` form is used).
     pub detect: DetectParams,
 }
@@ -27,7 +30,7 @@ pub struct TrackParams {
 impl Default for TrackParams {
     /// goalseek: 6 cm gate growing 3 cm per metre driven and by two ray spacings at the
     /// landmark's range, three missed scans tolerated, no point fallback (it slides along
-    /// flat faces).
+    /// flat faces), nothing re-identified at the range limit.
     fn default() -> Self {
         Self {
             gate_m: 0.06,
@@ -35,6 +38,7 @@ impl Default for TrackParams {
             gate_ray_spacings: 2.0,
             max_missed_scans: 3,
             point_fallback: false,
+            reject_near_range_limit: true,
             detect: DetectParams::default(),
         }
     }
@@ -49,6 +53,7 @@ impl TrackParams {
             gate_ray_spacings: 0.0,
             max_missed_scans: 0,
             point_fallback: false,
+            reject_near_range_limit: false,
             detect: DetectParams::paper(),
         }
     }
@@ -141,9 +146,13 @@ impl Tracker {
             (Some(a), Some(b)) => a == b || a == OpenSide::Both || b == OpenSide::Both,
             _ => true,
         };
+        let clear = |range_m: f64| {
+            !self.params.reject_near_range_limit
+                || range_m < geometry.max_range_m - self.params.detect.range_limit_margin_m
+        };
         let best = found
             .iter()
-            .filter(|l| compatible(l))
+            .filter(|l| compatible(l) && clear(l.range_m))
             .map(|l| (l.robot_point().distance_m(&pred), l))
             .filter(|(d, _)| *d <= gate)
             .min_by(|a, b| a.0.total_cmp(&b.0))
@@ -153,6 +162,7 @@ impl Tracker {
                 return None;
             }
             scan.robot_hits(geometry)
+                .filter(|(_, p)| clear(p.range_m()))
                 .map(|(i, p)| (p.distance_m(&pred), i, p))
                 .filter(|(d, _, _)| *d <= 0.5 * gate)
                 .min_by(|a, b| a.0.total_cmp(&b.0))

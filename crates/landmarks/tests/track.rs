@@ -125,3 +125,43 @@ fn gate_refuses_a_feature_that_jumped() {
         other => panic!("{other:?}"),
     }
 }
+
+#[test]
+fn a_wall_running_out_of_range_gives_no_fix() {
+    // A wall along y = -1.5: its last hit before the 4 m range lies sqrt(4^2 - 1.5^2) = 3.708 m
+    // ahead whatever the robot's x, so it moves with the robot.
+    let g = ScanGeometry::paper();
+    let wall = vec![((-20.0, -1.5), (20.0, -1.5))];
+    let scan = scan_at(&g, &wall, 0.0, 0.0, 0.0);
+    let found = detect(&g, &scan, &DetectParams::default().permissive());
+    let l = *found
+        .iter()
+        .find(|l| (l.robot_point().x_m() - 3.708).abs() < 0.05)
+        .expect("the wall's last hit");
+    assert!(l.near_range_limit, "{l:?}");
+    let sliding = TrackParams {
+        reject_near_range_limit: false,
+        ..TrackParams::default()
+    };
+    let (mut off, mut on) = (
+        Tracker::new(l, sliding),
+        Tracker::new(l, TrackParams::default()),
+    );
+    let mut last_x = None;
+    for k in 1..=10 {
+        let told = 0.05 * k as f64;
+        let scan = scan_at(&g, &wall, told, 0.0, 0.0);
+        // Without the rule it is re-identified where it was: no travel after 0.5 m.
+        match off.update(&g, &scan, told) {
+            TrackUpdate::Tracked(t) => last_x = Some(t.robot_point().x_m()),
+            other => panic!("step {k}: {other:?}"),
+        }
+        assert!(!matches!(
+            on.update(&g, &scan, told),
+            TrackUpdate::Tracked(_)
+        ));
+    }
+    let x = last_x.unwrap();
+    assert!((x - 3.708).abs() < 0.05, "{x}");
+    assert!(on.is_lost());
+}

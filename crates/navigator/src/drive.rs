@@ -58,6 +58,9 @@ pub(crate) struct Drive {
     pub(crate) commanded_m: f64,
     /// Measured travel at the last fix and the commanded travel at that fix.
     fix: Option<(f64, f64)>,
+    /// The landmark edge's travel at the last tracked scan and the commanded travel then:
+    /// what the drive aims by, since it stops when the edge is abreast.
+    edge_fix: Option<(f64, f64)>,
     /// True when the last travel estimate came from a well-constrained scan match (the
     /// laser), not from the commands or a landmark fix alone.
     pub(crate) laser_measured: bool,
@@ -112,6 +115,7 @@ impl Drive {
             key,
             commanded_m: 0.0,
             fix: None,
+            edge_fix: None,
             laser_measured: false,
             last_scan: scan,
             watch: None,
@@ -124,19 +128,20 @@ impl Drive {
             .map_or(self.commanded_m, |(m, c)| m + self.commanded_m - c)
     }
 
-    /// The landmark's distance ahead at the start: its centre's once the object proved round.
-    fn ob(&self) -> Option<f64> {
-        self.round.as_ref().and_then(|r| r.ob_m).or(self.ob0)
+    /// How far the landmark's edge is still ahead on a leg to B, metres.
+    fn to_b_m(&self) -> Option<f64> {
+        let ob = self.ob0.filter(|_| self.stop_at_side)?;
+        let travel = self
+            .edge_fix
+            .map_or(self.commanded_m, |(m, c)| m + self.commanded_m - c);
+        Some(ob - travel)
     }
 
     /// What is left of the leg as planned: to B when the landmark gives its distance (the
     /// drive stops there), else to the limit, metres.
     pub(crate) fn remaining_m(&self) -> f64 {
         let to_limit = self.limit_m - self.commanded_m;
-        match (self.stop_at_side, self.ob()) {
-            (true, Some(ob)) => (ob - self.measured_m()).min(to_limit),
-            _ => to_limit,
-        }
+        self.to_b_m().map_or(to_limit, |b| b.min(to_limit))
     }
 
     /// The next step to command, or `None` when the drive is over.
@@ -147,10 +152,7 @@ impl Drive {
             return None;
         }
         // Aim the last step at B itself when the landmark gives its distance.
-        let to_go = match (self.stop_at_side, self.ob()) {
-            (true, Some(ob)) => (ob - self.measured_m()).max(0.01),
-            _ => limit - commanded,
-        };
+        let to_go = self.to_b_m().map_or(limit - commanded, |b| b.max(0.01));
         let step = self.step_m.min(to_go).min(limit - commanded);
         (step > 1e-6).then_some(step)
     }
@@ -165,14 +167,14 @@ impl Drive {
             .map(|t| t.update(&nav.geometry, scan, self.commanded_m));
         match update {
             Some(TrackUpdate::Tracked(l)) => {
+                let edge = self.ob0.unwrap_or(0.0) - l.range_m * l.bearing_rad.cos();
+                self.edge_fix = Some((edge, self.commanded_m));
                 let centre = self
                     .round
                     .as_mut()
                     .map_or(Centre::Unknown, |r| r.travel(&nav.geometry, scan, &l));
                 let measured = match centre {
-                    Centre::Unknown => {
-                        Some(self.ob0.unwrap_or(0.0) - l.range_m * l.bearing_rad.cos())
-                    }
+                    Centre::Unknown => Some(edge),
                     Centre::Missed => None,
                     Centre::Travel(m) => Some(m),
                 };

@@ -158,6 +158,10 @@ pub struct TrackingParams {
     /// slides around it (a configuration without the key, made before it: the edge).
     #[serde(default)]
     pub round_centre: bool,
+    /// Re-identify nothing within `[landmarks] range_limit_margin_m` of the maximum range,
+    /// where a surface's last hit moves with the robot (a configuration without the key: any).
+    #[serde(default)]
+    pub reject_near_range_limit: bool,
 }
 
 /// Localisation.
@@ -537,6 +541,7 @@ impl Params {
                 gate_m: 0.06,
                 max_missed_scans: 3,
                 round_centre: true,
+                reject_near_range_limit: true,
             },
             localiser: LocaliserParams {
                 heading_rule: HeadingRule::ScanMatched,
@@ -611,6 +616,7 @@ impl Params {
         c.landmarks.range_limit_margin_m = 0.0;
         c.tracking.gate_m = 0.2;
         c.tracking.round_centre = false;
+        c.tracking.reject_near_range_limit = false;
         c.localiser.heading_rule = HeadingRule::Commanded;
         c.localiser.travel_rule = TravelRule::Landmark;
         c.localiser.revisit = false;
@@ -765,6 +771,7 @@ impl Params {
         select.min_ahead_m = l.min_ob_m;
         track.gate_m = self.tracking.gate_m;
         track.max_missed_scans = self.tracking.max_missed_scans;
+        track.reject_near_range_limit = self.tracking.reject_near_range_limit;
         track.detect = detect;
         (detect, select, track)
     }
@@ -849,10 +856,9 @@ mod tests {
             .as_object_mut()
             .unwrap()
             .remove("line_of_sight");
-        stored["tracking"]
-            .as_object_mut()
-            .unwrap()
-            .remove("round_centre");
+        let t = stored["tracking"].as_object_mut().unwrap();
+        t.remove("round_centre");
+        t.remove("reject_near_range_limit");
         let old: Params = serde_json::from_value(stored).unwrap();
         // The matcher's own heading prior (2 deg), every turn made.
         assert_eq!(old.localiser.drive_turn_sigma_deg, 2.0);
@@ -865,6 +871,9 @@ mod tests {
         assert!(!old.planner.line_of_sight && !old.planner_params().line_of_sight);
         // Travel measured on a landmark's edge hit.
         assert!(!old.tracking.round_centre);
+        // Landmarks re-identified at the range limit too.
+        assert!(!old.tracking.reject_near_range_limit);
+        assert!(!old.landmark_params().2.reject_near_range_limit);
         assert!(old.validate().is_ok());
         let mut back = old;
         back.localiser.drive_turn_sigma_deg = g.localiser.drive_turn_sigma_deg;
@@ -873,6 +882,7 @@ mod tests {
         back.navigator.skip_turn_below_deg = g.navigator.skip_turn_below_deg;
         back.planner.line_of_sight = true;
         back.tracking.round_centre = true;
+        back.tracking.reject_near_range_limit = true;
         assert_eq!(back, g);
     }
 

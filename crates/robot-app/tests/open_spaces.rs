@@ -11,10 +11,15 @@ use sim_laser::{SimSetup, WorldKind, generated_world};
 /// The run in clutter world `k` (its own start and target, noise seed 0) with goalseek's
 /// defaults changed by `change`.
 fn run(k: u64, change: impl FnOnce(&mut Params)) -> robot_app::outputs::Summary {
+    run_seeded(k, 0, change)
+}
+
+/// [`run`] with noise seed `seed`.
+fn run_seeded(k: u64, seed: u64, change: impl FnOnce(&mut Params)) -> robot_app::outputs::Summary {
     let (world, start, goal) = generated_world(WorldKind::Clutter, k).unwrap();
     let setup = SimSetup {
         start,
-        seed: 0,
+        seed,
         ..SimSetup::new(Arc::new(world), format!("clutter-{k}"))
     };
     let mut p = Params::preset(Method::Goalseek);
@@ -25,14 +30,15 @@ fn run(k: u64, change: impl FnOnce(&mut Params)) -> robot_app::outputs::Summary 
 }
 
 /// The drive and turn rules before the drive's heading prior and the skipped small turns, the
-/// rays ranked by their grid path alone, partial travel taken at 0.05 m and travel measured on
-/// a post's edge.
+/// rays ranked by their grid path alone, partial travel taken at 0.05 m, travel measured on a
+/// post's edge and every ray shift taken.
 fn old_rules(p: &mut Params) {
     p.tracking.round_centre = false;
     p.localiser.drive_turn_sigma_deg = 2.0;
     p.localiser.partial_travel_max_sigma_m = 0.05;
     p.navigator.skip_turn_below_deg = 0.0;
     p.planner.line_of_sight = false;
+    p.localiser.ray_shift_max_sigmas = 0.0;
 }
 
 /// The median absolute final heading error over clutter worlds 0..20 (noise seed 0), degrees.
@@ -154,21 +160,37 @@ fn a_partial_travel_match_must_pin_the_travel() {
 
 #[test]
 fn travel_on_a_round_post_is_measured_on_its_centre() {
-    // Clutter worlds 0 and 26, noise seed 0 (both false arrivals in the 200-run batch): legs
-    // whose scan match fails keep the travel measured on a disc's edge, the hit where the rays
-    // graze it, and that hit slides round the disc as the robot passes (world 26: 2.79 m
-    // measured for a 2.99 m drive). Measured on the disc's fitted centre, both arrive.
-    for k in [0, 26] {
-        let edge = run(k, |p| p.tracking.round_centre = false);
+    // Clutter world 26 with noise seed 0 and world 6 with seed 1 (false arrivals in the
+    // 200-run batch): legs whose scan match fails keep the travel measured on a disc's edge,
+    // the hit where the rays graze it, and that hit slides round the disc as the robot passes
+    // (world 26: 2.79 m measured for a 2.99 m drive). Measured on the disc's fitted centre,
+    // both arrive.
+    for (k, seed) in [(26, 0), (6, 1)] {
+        let edge = run_seeded(k, seed, |p| p.tracking.round_centre = false);
         assert_eq!(
             edge.reason,
             Reason::FalseArrival,
             "world {k}: {}",
             edge.note
         );
-        assert!(edge.final_position_error_m.unwrap() > 0.15, "world {k}");
-        let centre = run(k, |_| {});
+        assert!(edge.final_position_error_m.unwrap() > 0.3, "world {k}");
+        let centre = run_seeded(k, seed, |_| {});
         assert!(centre.reached, "world {k}: {}", centre.note);
         assert!(centre.final_position_error_m.unwrap() < 0.1, "world {k}");
     }
+}
+
+#[test]
+fn a_landmark_at_the_range_limit_gives_no_fix() {
+    // Clutter world 188, noise seed 0: in leg 6 the tracked landmark, 3.8 m off to the side
+    // and behind, recedes to the 4 m range and becomes the last hit of a surface running out
+    // of range, which moves with the robot. Re-identified there, it measured 0.52 m for a
+    // 0.99 m drive (the scan match failed: nothing else in range), and the run claimed
+    // arrival 0.37 m from the target.
+    let sliding = run(188, |p| p.tracking.reject_near_range_limit = false);
+    assert_eq!(sliding.reason, Reason::FalseArrival, "{}", sliding.note);
+    assert!(sliding.final_position_error_m.unwrap() > 0.3);
+    let clear = run(188, |_| {});
+    assert!(clear.reached, "{}", clear.note);
+    assert!(clear.final_position_error_m.unwrap() < 0.1);
 }

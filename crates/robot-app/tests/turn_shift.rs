@@ -43,10 +43,10 @@ fn a_ray_shift_far_from_the_command_needs_the_match() {
         return;
     }
     let dir = tempfile::tempdir().unwrap();
-    // The first turn (100.4 deg, two chunks of 50.9 deg): the matcher refuses the second
-    // chunk and the ray shift puts it at 47.4 deg, 3.5 deg (3.5 turn sigmas) off the command,
-    // while the base turned about 50.8 deg. Taken, the heading stays 3.4 deg off for the run:
-    // a false arrival 0.64 m from the target. Refused, the command stands (1 deg sigma).
+    // The first turn is commanded as two chunks of 50.9 deg (`-v`: `turn measured`). The
+    // matcher refuses the second and the ray shift puts it at 47.4 deg, 3.5 deg (3.5 turn
+    // sigmas) off the command. Taken, the run ends 3.4 deg off in heading: a false arrival
+    // 0.68 m from the target. Refused, the command stands (1 deg sigma).
     let taken = run(
         dir.path(),
         "taken",

@@ -163,12 +163,13 @@ struct Explored {
     recorded: anyhow::Result<()>,
 }
 
-/// Exploring's own defaults over the method's preset: the planner's line of sight and the
-/// travel on a round landmark's centre off (measured no better for exploring,
-/// `docs/explore.md`). A `--config` file may still turn them on.
+/// Exploring's own defaults over the method's preset: the planner's line of sight, the
+/// travel on a round landmark's centre and the tracker's range-limit rule off (measured no
+/// better for exploring, `docs/explore.md`). A `--config` file may still turn them on.
 pub fn explore_defaults(p: &mut crate::config::Params) {
     p.planner.line_of_sight = false;
     p.tracking.round_centre = false;
+    p.tracking.reject_near_range_limit = false;
 }
 
 /// Runs `robot-app explore`: in the simulator, or with `--port` on a real Hokuyo and base.
