@@ -2,11 +2,12 @@
 //! then a wide correlative search around a constant-velocity prediction, refined by
 //! point-to-line ICP.
 
-use std::collections::VecDeque;
+use std::collections::{HashSet, VecDeque};
+use std::hash::{BuildHasherDefault, Hasher};
 
 use localiser::{MatchParams, MatchTarget, ScanMatch};
 use nalgebra::{Matrix3, Vector3};
-use scan_types::{Pose2, Scan, ScanGeometry, angle_diff_rad, normalize_angle_rad};
+use scan_types::{Pose2, Scan, ScanGeometry, angle_diff_rad, floor_i64, normalize_angle_rad};
 use serde::{Deserialize, Serialize};
 
 use crate::correlative::{Window, search};
@@ -660,21 +661,46 @@ pub(crate) fn thin_hits(
     params: &FrontEndParams,
 ) -> Vec<[f64; 2]> {
     let mut out: Vec<[f64; 2]> = Vec::new();
-    let mut seen = std::collections::HashSet::new();
+    let mut seen = HashSet::with_hasher(BuildHasherDefault::<VoxelHasher>::default());
     for (_, p) in scan.robot_hits(geometry) {
         let r = p.range_m();
         if !(r >= params.min_range_m && r <= params.max_range_m) {
             continue;
         }
         let key = (
-            (p.x_m() / params.voxel_m).floor() as i64,
-            (p.y_m() / params.voxel_m).floor() as i64,
+            floor_i64(p.x_m() / params.voxel_m),
+            floor_i64(p.y_m() / params.voxel_m),
         );
         if seen.insert(key) {
             out.push([p.x_m(), p.y_m()]);
         }
     }
     out
+}
+
+/// Hashes voxel keys (small integers, no adversary) by a multiply-rotate mix: cheaper than
+/// the default SipHash.
+#[derive(Default)]
+struct VoxelHasher(u64);
+
+impl Hasher for VoxelHasher {
+    fn finish(&self) -> u64 {
+        self.0
+    }
+
+    fn write(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.write_u64(u64::from(b));
+        }
+    }
+
+    fn write_u64(&mut self, v: u64) {
+        self.0 = (self.0.rotate_left(29) ^ v).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+    }
+
+    fn write_i64(&mut self, v: i64) {
+        self.write_u64(v as u64);
+    }
 }
 
 #[cfg(test)]

@@ -1,5 +1,7 @@
 //! A likelihood field over a submap's points, with max-pooled copies for branch and bound.
 
+use scan_types::{floor_i32, floor_i64};
+
 /// Field values are stored as `u8`: 255 on a point, falling off as a Gaussian.
 pub(crate) const FULL: u32 = 255;
 
@@ -46,22 +48,35 @@ impl ScoreGrid {
         ];
         let width = ((hi[0] - lo[0] + 2.0 * margin) / resolution_m).ceil() as usize + 1;
         let height = ((hi[1] - lo[1] + 2.0 * margin) / resolution_m).ceil() as usize + 1;
-        let mut base = vec![0u8; width * height];
         let kernel = Kernel::new(radius, resolution_m, sigma_m);
+        // Room past the last cell for a whole padded patch row (zeros there change nothing).
+        let mut base = vec![0u8; width * height + kernel.stride];
         let r = radius as i64;
         let (w, h) = (width as i64, height as i64);
         for p in points {
             let fx = (p[0] - origin[0]) / resolution_m;
             let fy = (p[1] - origin[1]) / resolution_m;
-            let (cx, cy) = (fx.floor() as i64, fy.floor() as i64);
+            let (cx, cy) = (floor_i64(fx), floor_i64(fy));
             let patch = kernel.patch(fx - cx as f64, fy - cy as f64);
-            // The margin keeps the patch inside the grid; clipped all the same.
+            if cx - r >= 0 && cx + r < w && cy - r >= 0 && cy + r < h {
+                // Inside the grid (the margin sees to it): whole padded rows, which vectorise;
+                // a row's padding lands on cells to its right, or on the next row's first
+                // cells, and leaves them as they are.
+                for (j, src) in patch.chunks_exact(kernel.stride).enumerate() {
+                    let start = (cy - r) as usize * width + j * width + (cx - r) as usize;
+                    let dst = &mut base[start..start + kernel.stride];
+                    for (d, s) in dst.chunks_exact_mut(LANES).zip(src.chunks_exact(LANES)) {
+                        max_lanes(d.try_into().expect("LANES"), s.try_into().expect("LANES"));
+                    }
+                }
+                continue;
+            }
             let (x0, x1) = ((cx - r).max(0), (cx + r).min(w - 1));
             if x0 > x1 {
                 continue;
             }
             for y in (cy - r).max(0)..=(cy + r).min(h - 1) {
-                let k = (y - cy + r) as usize * kernel.width;
+                let k = (y - cy + r) as usize * kernel.stride;
                 let src = &patch[k + (x0 - cx + r) as usize..=k + (x1 - cx + r) as usize];
                 let start = y as usize * width;
                 let dst = &mut base[start + x0 as usize..=start + x1 as usize];
@@ -70,6 +85,7 @@ impl ScoreGrid {
                 }
             }
         }
+        base.truncate(width * height);
         let mut levels = vec![base];
         for k in 1..=depth {
             let next = pool(&levels[k - 1], width, height, 1usize << (k - 1));
@@ -113,8 +129,8 @@ impl ScoreGrid {
     #[inline]
     pub(crate) fn cell(&self, p: [f64; 2]) -> [i32; 2] {
         [
-            ((p[0] - self.origin[0]) / self.resolution_m).floor() as i32,
-            ((p[1] - self.origin[1]) / self.resolution_m).floor() as i32,
+            floor_i32((p[0] - self.origin[0]) / self.resolution_m),
+            floor_i32((p[1] - self.origin[1]) / self.resolution_m),
         ]
     }
 }
@@ -147,14 +163,27 @@ fn pool(prev: &[u8], width: usize, height: usize, s: usize) -> Vec<u8> {
 /// within 1 / 32 of a cell).
 const SUB: usize = 16;
 
+/// Bytes a patch row is padded to a multiple of (one SIMD register).
+const LANES: usize = 16;
+
+/// `d = max(d, s)` lane by lane (one vector instruction).
+#[inline(always)]
+fn max_lanes(d: &mut [u8; LANES], s: &[u8; LANES]) {
+    for i in 0..LANES {
+        d[i] = d[i].max(s[i]);
+    }
+}
+
 /// The Gaussian fall-off around a point, tabulated for the point at `SUB + 1` positions
 /// along each axis within its cell: each patch of `width` x `width` cells holds the product
 /// of an x and a y factor (each `sqrt(FULL)` at the point), rounded, so that no exponential
 /// or product is evaluated per cell.
 struct Kernel {
     width: usize,
+    /// Row length in `patches`: `width` padded with zeros to a multiple of `LANES`.
+    stride: usize,
     /// `(SUB + 1)^2` patches, row after row: patch `qy * (SUB + 1) + qx` for a point `qx /
-    /// SUB` and `qy / SUB` into its cell, entry `j * width + i` for the cell `i - radius`
+    /// SUB` and `qy / SUB` into its cell, entry `j * stride + i` for the cell `i - radius`
     /// right of it and `j - radius` above.
     patches: Vec<u8>,
 }
@@ -171,7 +200,8 @@ impl Kernel {
                 factors.push((-d * d * inv).exp() * (FULL as f64).sqrt());
             }
         }
-        let mut patches = Vec::with_capacity((SUB + 1) * (SUB + 1) * width * width);
+        let stride = width.div_ceil(LANES) * LANES;
+        let mut patches = Vec::with_capacity((SUB + 1) * (SUB + 1) * width * stride);
         for qy in 0..=SUB {
             for qx in 0..=SUB {
                 for wy in &factors[qy * width..(qy + 1) * width] {
@@ -181,16 +211,21 @@ impl Kernel {
                             .iter()
                             .map(|wx| (wy * wx + 0.5) as u8),
                     );
+                    patches.resize(patches.len() + stride - width, 0);
                 }
             }
         }
-        Self { width, patches }
+        Self {
+            width,
+            stride,
+            patches,
+        }
     }
 
     /// The patch for a point `fx`, `fy` (0..1) into its cell.
     fn patch(&self, fx: f64, fy: f64) -> &[u8] {
         let q = |f: f64| ((f * SUB as f64 + 0.5) as usize).min(SUB);
-        let n = self.width * self.width;
+        let n = self.width * self.stride;
         let k = q(fy) * (SUB + 1) + q(fx);
         &self.patches[k * n..(k + 1) * n]
     }

@@ -3,6 +3,7 @@
 use scan_types::{Pose2, Scan, ScanGeometry, normalize_angle_rad};
 
 use super::surface::{Oriented, oriented_hits};
+use super::target::Hold;
 use super::{MatchParams, MatchTarget, ScanMatch};
 
 /// A 3 x 3 matrix (x, y, theta), row-major.
@@ -37,8 +38,9 @@ impl MatchTarget {
         let mut iterations = 0;
         let mut last = None;
         let mut prev_step = None;
-        // Each point's match in the previous iteration (a hint for the next search).
-        let mut matched: Vec<Option<usize>> = vec![None; cur.len()];
+        // Each point's match in the previous iteration (a hint for the next search), with
+        // where its search was made and how far that answer holds.
+        let mut matched: Vec<Option<Held>> = vec![None; cur.len()];
         for it in 0..params.max_iterations.max(1) {
             iterations = it + 1;
             let (mut h, h_data, mut g, sq, pairs) =
@@ -83,7 +85,7 @@ impl MatchTarget {
     fn linearise(
         &self,
         cur: &[Oriented],
-        matched: &mut [Option<usize>],
+        matched: &mut [Option<Held>],
         x: [f64; 3],
         (gate, min_cos): (f64, f64),
         w_pt: f64,
@@ -100,8 +102,24 @@ impl MatchTarget {
                 x[1] + s * o.p[0] + c * o.p[1],
             ];
             let n_cur = [c * o.n[0] - s * o.n[1], s * o.n[0] + c * o.n[1]];
-            *hint = self.nearest_hinted(q, n_cur, gate, min_cos, *hint);
-            let Some(m) = hint.map(|k| &self.sorted[k]) else {
+            let rechecked = hint.as_ref().and_then(|h| {
+                let moved = ((q[0] - h.q[0]).powi(2) + (q[1] - h.q[1]).powi(2)).sqrt();
+                let turn = normalize_angle_rad(x[2] - h.theta);
+                self.recheck(&h.hold, (q, n_cur), (moved, turn), gate, min_cos)
+            });
+            if let (Some(k), Some(h)) = (rechecked, hint.as_mut()) {
+                h.k = k;
+            } else {
+                *hint = self
+                    .nearest_held(q, n_cur, gate, min_cos, hint.map(|h| h.k))
+                    .map(|(k, hold)| Held {
+                        k,
+                        q,
+                        theta: x[2],
+                        hold,
+                    });
+            }
+            let Some(m) = hint.map(|h| &self.sorted[h.k]) else {
                 continue;
             };
             let r = m.n[0] * (q[0] - m.p[0]) + m.n[1] * (q[1] - m.p[1]);
@@ -124,6 +142,16 @@ impl MatchTarget {
         }
         (h, h_data, g, sq, pairs)
     }
+}
+
+/// A point's match, where the search for it was made (query point and heading) and how far
+/// that answer holds: while it does, the search is not repeated.
+#[derive(Debug, Clone, Copy)]
+struct Held {
+    k: usize,
+    q: [f64; 2],
+    theta: f64,
+    hold: Hold,
 }
 
 /// The match from the last iteration's normal equations and fit (h, h_data, sq, used) at `x`,

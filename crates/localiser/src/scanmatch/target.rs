@@ -184,20 +184,21 @@ impl MatchTarget {
 
     /// The reference point nearest `q` within `gate` whose normal agrees with `n`, as an
     /// index into `sorted`, given the index of a point `hint` that is probably near `q` (the
-    /// match of the previous iteration).
+    /// match of the previous iteration); with what [`Self::recheck`] needs to answer for a
+    /// query moved a little without searching again.
     ///
     /// First searches the cells within `min(gate, NEAR_M, distance to the hint)` of `q`: a
     /// point found there nearer than that radius is the nearest overall (every point
     /// outside those cells lies farther away). Otherwise the radius doubles (at least one
     /// cell) until such a point is found or the radius reaches `gate`.
-    pub(super) fn nearest_hinted(
+    pub(super) fn nearest_held(
         &self,
         q: [f64; 2],
         n: [f64; 2],
         gate: f64,
         min_cos: f64,
         hint: Option<usize>,
-    ) -> Option<usize> {
+    ) -> Option<(usize, Hold)> {
         if self.width == 0 || !is_finite2(q) || gate.is_nan() || gate < 0.0 {
             return None;
         }
@@ -217,19 +218,18 @@ impl MatchTarget {
         let mut whole = None;
         loop {
             let found = self.nearest_in(q, n, reach, gate, min_cos);
+            let answer = || found.best.map(|(_, k)| (k, found.hold()));
             if reach >= gate || whole.is_some_and(|w| reach >= w) {
-                return found.map(|(_, k)| k);
+                return answer();
             }
             // Margin for the rounding of cell assignment.
             let sure = (reach - 1e-9).max(0.0);
-            if let Some((d2, k)) = found
-                && d2 < sure * sure
-            {
-                return Some(k);
+            if found.best.is_some_and(|(d2, _)| d2 < sure * sure) {
+                return answer();
             }
             let whole = *whole.get_or_insert_with(|| self.grid_reach(q));
             if reach >= whole {
-                return found.map(|(_, k)| k);
+                return answer();
             }
             reach = (2.0 * reach).max(CELL_M).min(gate);
         }
@@ -246,8 +246,8 @@ impl MatchTarget {
             .fold(0.0, f64::max)
     }
 
-    /// The nearest point within `gate` (squared distance and index into `sorted`) among the
-    /// cells within `reach` of `q`.
+    /// The nearest point within `gate` among the cells within `reach` of `q`, with what
+    /// else the search saw.
     pub(super) fn nearest_in(
         &self,
         q: [f64; 2],
@@ -255,7 +255,12 @@ impl MatchTarget {
         reach: f64,
         gate: f64,
         min_cos: f64,
-    ) -> Option<(f64, usize)> {
+    ) -> Nearest {
+        let mut found = Nearest {
+            best: None,
+            kept: [(f64::INFINITY, 0); KEEP],
+            covered_m: f64::INFINITY,
+        };
         let fx = (q[0] - self.origin[0]) / CELL_M;
         let fy = (q[1] - self.origin[1]) / CELL_M;
         let r = reach / CELL_M;
@@ -263,17 +268,28 @@ impl MatchTarget {
         let x1 = floor(fx + r);
         let y1 = floor(fy + r);
         if x1 < 0.0 || y1 < 0.0 {
-            return None;
+            found.covered_m = 0.0;
+            return found;
         }
         let x0 = floor(fx - r).max(0.0);
         let y0 = floor(fy - r).max(0.0);
         if x0 > wmax || y0 > hmax {
-            return None;
+            found.covered_m = 0.0;
+            return found;
         }
-        let (x0, x1) = (x0 as usize, x1.min(wmax) as usize);
-        let (y0, y1) = (y0 as usize, y1.min(hmax) as usize);
+        let (x1, y1) = (x1.min(wmax), y1.min(hmax));
+        // Distance from q to the nearest side of the searched block that has cells beyond
+        // it: no point outside the block lies nearer.
+        let sides = [
+            (x0 > 0.0).then_some(fx - x0),
+            (x1 < wmax).then_some(x1 + 1.0 - fx),
+            (y0 > 0.0).then_some(fy - y0),
+            (y1 < hmax).then_some(y1 + 1.0 - fy),
+        ];
+        found.covered_m = sides.into_iter().flatten().fold(f64::INFINITY, f64::min) * CELL_M;
+        let (x0, x1) = (x0 as usize, x1 as usize);
+        let (y0, y1) = (y0 as usize, y1 as usize);
         let g2 = gate * gate;
-        let mut best: Option<(f64, usize)> = None;
         for cy in y0..=y1 {
             let row = cy * self.width;
             // The cells of one row are contiguous in `sorted`.
@@ -281,15 +297,112 @@ impl MatchTarget {
             let span = first..self.starts[row + x1 + 1] as usize;
             for (k, o) in self.sorted[span].iter().enumerate() {
                 let d2 = (o.p[0] - q[0]).powi(2) + (o.p[1] - q[1]).powi(2);
-                if d2 > g2 || o.n[0] * n[0] + o.n[1] * n[1] < min_cos {
+                let cos = o.n[0] * n[0] + o.n[1] * n[1];
+                // A point whose normal could turn into agreement may answer a moved query.
+                if cos >= min_cos - HOLD_TURN_COS {
+                    found.keep(d2, first + k);
+                }
+                if d2 > g2 || cos < min_cos {
                     continue;
                 }
-                if best.is_none_or(|(b, _)| d2 < b) {
-                    best = Some((d2, first + k));
+                if found.best.is_none_or(|(b, _)| d2 < b) {
+                    found.best = Some((d2, first + k));
                 }
             }
         }
-        best
+        found
+    }
+}
+
+/// A query's normal may turn by this much (radians, which bound the change of its cosine
+/// with any other unit normal) before a [`Hold`] lapses.
+const HOLD_TURN_COS: f64 = 0.05;
+
+/// The nearest points a search keeps for [`MatchTarget::recheck`].
+const KEEP: usize = 3;
+
+/// What one nearest-point search over a block of cells saw.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Nearest {
+    /// Squared distance and index of the nearest point within the gate whose normal agrees.
+    pub(super) best: Option<(f64, usize)>,
+    /// The nearest points (squared distance, index; nearest first; infinite distance for
+    /// none) that answer or could after a turn of the normal by less than `HOLD_TURN_COS`,
+    /// whatever the gate. No such point outside them lies nearer than the last.
+    kept: [(f64, usize); KEEP],
+    /// Distance from the query within which every cell was searched, metres.
+    covered_m: f64,
+}
+
+impl Nearest {
+    /// Keeps the point `k` at squared distance `d2` if it is among the `KEEP` nearest.
+    #[inline]
+    fn keep(&mut self, d2: f64, k: usize) {
+        if d2 >= self.kept[KEEP - 1].0 {
+            return;
+        }
+        let mut i = KEEP - 1;
+        while i > 0 && self.kept[i - 1].0 > d2 {
+            self.kept[i] = self.kept[i - 1];
+            i -= 1;
+        }
+        self.kept[i] = (d2, k);
+    }
+
+    /// The kept points and how near any other point lies.
+    fn hold(&self) -> Hold {
+        let mut kept = [0; KEEP];
+        for (dst, src) in kept.iter_mut().zip(&self.kept) {
+            *dst = src.1;
+        }
+        Hold {
+            kept,
+            kept_len: self.kept.iter().filter(|c| c.0.is_finite()).count(),
+            limit_m: self.kept[KEEP - 1].0.sqrt().min(self.covered_m),
+        }
+    }
+}
+
+/// What a search saw around its query: the nearest points (indices into `sorted`) that
+/// answer or could after a small turn, and the distance within which no other point lies.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct Hold {
+    kept: [usize; KEEP],
+    kept_len: usize,
+    limit_m: f64,
+}
+
+impl MatchTarget {
+    /// The point [`Self::nearest_held`] would answer for a query `moved_m` from the one whose
+    /// search gave `hold` and its normal turned by `turn_rad`, when the kept points prove it
+    /// (one lies nearer than anything else can); `None` when they do not: search again.
+    pub(super) fn recheck(
+        &self,
+        hold: &Hold,
+        (q, n): ([f64; 2], [f64; 2]),
+        (moved_m, turn_rad): (f64, f64),
+        gate: f64,
+        min_cos: f64,
+    ) -> Option<usize> {
+        if turn_rad.abs() >= HOLD_TURN_COS - 1e-9 {
+            return None;
+        }
+        let g2 = gate * gate;
+        let mut best: Option<(f64, usize)> = None;
+        for &k in &hold.kept[..hold.kept_len] {
+            let o = &self.sorted[k];
+            let d2 = (o.p[0] - q[0]).powi(2) + (o.p[1] - q[1]).powi(2);
+            if d2 > g2 || o.n[0] * n[0] + o.n[1] * n[1] < min_cos {
+                continue;
+            }
+            // Ties go to the first point in index order, as in a search.
+            if best.is_none_or(|(b, bk)| d2 < b || (d2 == b && k < bk)) {
+                best = Some((d2, k));
+            }
+        }
+        let (d2, k) = best?;
+        // Every point not kept lies at least `limit_m - moved_m` from the moved query.
+        (d2.sqrt() + moved_m < hold.limit_m - 1e-9).then_some(k)
     }
 }
 
@@ -314,9 +427,22 @@ fn floor_nonneg(x: f64) -> usize {
 mod tests {
     use super::*;
 
-    #[test]
-    fn index_finds_the_brute_force_nearest() {
-        // Points on a few hand-placed segments (normals up or right) plus scattered ones.
+    impl MatchTarget {
+        /// [`MatchTarget::nearest_held`]'s point alone.
+        fn nearest_hinted(
+            &self,
+            q: [f64; 2],
+            n: [f64; 2],
+            (gate, min_cos): (f64, f64),
+            hint: Option<usize>,
+        ) -> Option<usize> {
+            self.nearest_held(q, n, gate, min_cos, hint).map(|(k, _)| k)
+        }
+    }
+
+    /// Points on a few hand-placed segments (normals up or right) plus scattered ones,
+    /// indexed, and the random source that placed them.
+    fn segments_and_scatter() -> (MatchTarget, scan_types::testkit::Noise) {
         let mut t = MatchTarget::new();
         for k in 0..200 {
             let u = k as f64 * 0.01;
@@ -340,35 +466,95 @@ mod tests {
         }
         t.dirty = true;
         t.index();
-        let min_cos = 0.5;
+        (t, noise)
+    }
+
+    /// The first point of least squared distance within `gate` whose normal agrees with `n`.
+    fn brute_force(t: &MatchTarget, q: [f64; 2], n: [f64; 2], gate: f64) -> Option<&Oriented> {
+        let mut want: Option<(f64, &Oriented)> = None;
+        for o in &t.points {
+            let d2 = (o.p[0] - q[0]).powi(2) + (o.p[1] - q[1]).powi(2);
+            if d2 <= gate * gate
+                && o.n[0] * n[0] + o.n[1] * n[1] >= MIN_COS
+                && want.is_none_or(|(b, _)| d2 < b)
+            {
+                want = Some((d2, o));
+            }
+        }
+        want.map(|w| w.1)
+    }
+
+    const MIN_COS: f64 = 0.5;
+
+    #[test]
+    fn index_finds_the_brute_force_nearest() {
+        let (t, mut noise) = segments_and_scatter();
+        let mut uniform = || noise.uniform();
+        let min_cos = MIN_COS;
         for _ in 0..2000 {
             let q = [uniform() * 4.0 - 2.0, uniform() * 4.0 - 2.0];
             let a = uniform() * std::f64::consts::TAU;
             let n = [a.cos(), a.sin()];
             for gate in [0.0, 0.01, 0.05, 0.06, 0.12, 0.3, 1.0, 10.0, f64::INFINITY] {
-                // Brute force: the first point of least squared distance within the gate.
-                let mut want: Option<(f64, &Oriented)> = None;
-                for o in &t.points {
-                    let d2 = (o.p[0] - q[0]).powi(2) + (o.p[1] - q[1]).powi(2);
-                    if d2 <= gate * gate
-                        && o.n[0] * n[0] + o.n[1] * n[1] >= min_cos
-                        && want.is_none_or(|(b, _)| d2 < b)
-                    {
-                        want = Some((d2, o));
-                    }
-                }
+                let want = brute_force(&t, q, n, gate);
                 // Without a hint, with a random one and with the answer as the hint.
                 let some = Some((uniform() * t.len() as f64) as usize);
-                let right = t.nearest_hinted(q, n, gate, min_cos, None);
+                let right = t.nearest_hinted(q, n, (gate, min_cos), None);
                 for hint in [None, some, right] {
-                    let got = t.nearest_hinted(q, n, gate, min_cos, hint);
-                    assert_eq!(got.map(|k| &t.sorted[k]), want.map(|w| w.1), "{q:?} {gate}");
+                    let got = t.nearest_hinted(q, n, (gate, min_cos), hint);
+                    assert_eq!(got.map(|k| &t.sorted[k]), want, "{q:?} {gate}");
                 }
             }
         }
         assert_eq!(
-            t.nearest_hinted([f64::NAN, 0.0], [1.0, 0.0], 0.3, 0.5, Some(0)),
+            t.nearest_hinted([f64::NAN, 0.0], [1.0, 0.0], (0.3, 0.5), Some(0)),
             None
+        );
+    }
+
+    #[test]
+    fn a_recheck_answers_only_what_a_search_would() {
+        let (t, mut noise) = segments_and_scatter();
+        let mut uniform = || noise.uniform();
+        let (mut answered, mut other_point, mut declined) = (0, 0, 0);
+        for _ in 0..4000 {
+            // Queries near the segments (where kept points crowd) and anywhere.
+            let q = if uniform() < 0.5 {
+                [-1.0 + 2.0 * uniform(), 0.5 + 0.1 * (uniform() - 0.5)]
+            } else {
+                [uniform() * 4.0 - 2.0, uniform() * 4.0 - 2.0]
+            };
+            let a = uniform() * std::f64::consts::TAU;
+            let gate = [0.06, 0.12, 0.3][(uniform() * 3.0) as usize];
+            let hint = Some((uniform() * t.len() as f64) as usize);
+            let n = [a.cos(), a.sin()];
+            let Some((k, hold)) = t.nearest_held(q, n, gate, MIN_COS, hint) else {
+                continue;
+            };
+            // Moves of up to 3 cm and turns of up to 4 deg, under the same or a narrower gate.
+            for _ in 0..20 {
+                let (m, dir) = (0.03 * uniform().powi(3), uniform() * std::f64::consts::TAU);
+                let q2 = [q[0] + m * dir.cos(), q[1] + m * dir.sin()];
+                let turn = (2.0 * uniform() - 1.0) * 4f64.to_radians();
+                let n2 = [(a + turn).cos(), (a + turn).sin()];
+                let gate2 = gate * (0.7 + 0.3 * uniform());
+                let moved = (q2[0] - q[0]).hypot(q2[1] - q[1]);
+                match t.recheck(&hold, (q2, n2), (moved, turn), gate2, MIN_COS) {
+                    Some(got) => {
+                        answered += 1;
+                        other_point += usize::from(got != k);
+                        let want = brute_force(&t, q2, n2, gate2);
+                        assert_eq!(Some(&t.sorted[got]), want, "{q:?} -> {q2:?}, turn {turn}");
+                    }
+                    None => declined += 1,
+                }
+            }
+        }
+        // Many answers, some of them another kept point than the first search's, and many
+        // moves declined (beyond what the kept points prove).
+        assert!(
+            answered > 5_000 && other_point > 200 && declined > 5_000,
+            "{answered} {other_point} {declined}"
         );
     }
 
@@ -400,7 +586,7 @@ mod tests {
         // A thinned target still finds the wall's point nearest a query.
         t.index();
         let k = t
-            .nearest_hinted([0.5, 0.0], [0.0, 1.0], 0.06, 0.5, None)
+            .nearest_hinted([0.5, 0.0], [0.0, 1.0], (0.06, 0.5), None)
             .unwrap();
         assert!(
             (t.sorted[k].p[0] - 0.5025).abs() < 1e-12,
