@@ -1,5 +1,7 @@
 //! A likelihood field over a submap's points, with max-pooled copies for branch and bound.
 
+use std::rc::Rc;
+
 use scan_types::{floor_i32, floor_i64};
 
 /// Field values are stored as `u8`: 255 on a point, falling off as a Gaussian.
@@ -48,7 +50,7 @@ impl ScoreGrid {
         ];
         let width = ((hi[0] - lo[0] + 2.0 * margin) / resolution_m).ceil() as usize + 1;
         let height = ((hi[1] - lo[1] + 2.0 * margin) / resolution_m).ceil() as usize + 1;
-        let kernel = Kernel::new(radius, resolution_m, sigma_m);
+        let kernel = Kernel::cached(radius, resolution_m, sigma_m);
         // Room past the last cell for a whole padded patch row (zeros there change nothing).
         let mut base = vec![0u8; width * height + kernel.stride];
         let r = radius as i64;
@@ -143,18 +145,14 @@ fn pool(prev: &[u8], width: usize, height: usize, s: usize) -> Vec<u8> {
     let keep = width.saturating_sub(s);
     for (row, out) in prev.chunks_exact(width).zip(cur.chunks_exact_mut(width)) {
         let (head, tail) = out.split_at_mut(keep);
-        for ((o, a), b) in head.iter_mut().zip(row).zip(&row[s.min(width)..]) {
-            *o = (*a).max(*b);
-        }
+        head.copy_from_slice(&row[..keep]);
+        max_assign(head, &row[s.min(width)..]);
         tail.copy_from_slice(&row[keep..]);
     }
     // Rows in order: row y + s is still the horizontal maximum when row y reads it.
     for y in 0..height.saturating_sub(s) {
         let (lower, upper) = cur.split_at_mut((y + s) * width);
-        let above = &upper[..width];
-        for (o, a) in lower[y * width..(y + 1) * width].iter_mut().zip(above) {
-            *o = (*o).max(*a);
-        }
+        max_assign(&mut lower[y * width..(y + 1) * width], &upper[..width]);
     }
     cur
 }
@@ -165,6 +163,19 @@ const SUB: usize = 16;
 
 /// Bytes a patch row is padded to a multiple of (one SIMD register).
 const LANES: usize = 16;
+
+/// `d = max(d, s)` element by element over `d` (`s` at least as long), a vector at a time.
+fn max_assign(d: &mut [u8], s: &[u8]) {
+    let s = &s[..d.len()];
+    let mut dc = d.chunks_exact_mut(LANES);
+    let mut sc = s.chunks_exact(LANES);
+    for (d, s) in (&mut dc).zip(&mut sc) {
+        max_lanes(d.try_into().expect("LANES"), s.try_into().expect("LANES"));
+    }
+    for (d, s) in dc.into_remainder().iter_mut().zip(sc.remainder()) {
+        *d = (*d).max(*s);
+    }
+}
 
 /// `d = max(d, s)` lane by lane (one vector instruction).
 #[inline(always)]
@@ -188,7 +199,30 @@ struct Kernel {
     patches: Vec<u8>,
 }
 
+/// A kernel's parameters: radius in cells, the bits of the resolution and of sigma.
+type KernelKey = (usize, u64, u64);
+
+thread_local! {
+    /// The last kernel built on this thread: a front end rebuilds its field at every keyframe
+    /// with the same parameters.
+    static LAST_KERNEL: std::cell::RefCell<Option<(KernelKey, Rc<Kernel>)>> =
+        const { std::cell::RefCell::new(None) };
+}
+
 impl Kernel {
+    /// [`Kernel::new`], built once per thread for the same parameters.
+    fn cached(radius: usize, resolution_m: f64, sigma_m: f64) -> Rc<Self> {
+        let key = (radius, resolution_m.to_bits(), sigma_m.to_bits());
+        LAST_KERNEL.with_borrow_mut(|last| match last {
+            Some((k, kernel)) if *k == key => Rc::clone(kernel),
+            _ => {
+                let kernel = Rc::new(Self::new(radius, resolution_m, sigma_m));
+                *last = Some((key, Rc::clone(&kernel)));
+                kernel
+            }
+        })
+    }
+
     fn new(radius: usize, resolution_m: f64, sigma_m: f64) -> Self {
         let width = 2 * radius + 1;
         let inv = 1.0 / (2.0 * sigma_m * sigma_m);
