@@ -1,7 +1,6 @@
 //! Number helpers for hot loops.
 
-/// `x.floor() as i64`, bit for bit (saturating, NaN to 0), without the libm call that
-/// `f64::floor` makes on the baseline x86-64 target (no rounding instruction there).
+/// `x.floor() as i64`, bit for bit (saturating, NaN to 0), without a libm call.
 ///
 /// ```
 /// assert_eq!(scan_types::floor_i64(-0.5), -1);

@@ -268,13 +268,11 @@ impl MatchTarget {
         let x1 = floor(fx + r);
         let y1 = floor(fy + r);
         if x1 < 0.0 || y1 < 0.0 {
-            found.covered_m = 0.0;
             return found;
         }
         let x0 = floor(fx - r).max(0.0);
         let y0 = floor(fy - r).max(0.0);
         if x0 > wmax || y0 > hmax {
-            found.covered_m = 0.0;
             return found;
         }
         let (x1, y1) = (x1.min(wmax), y1.min(hmax));
@@ -299,7 +297,7 @@ impl MatchTarget {
                 let d2 = (o.p[0] - q[0]).powi(2) + (o.p[1] - q[1]).powi(2);
                 let cos = o.n[0] * n[0] + o.n[1] * n[1];
                 // A point whose normal could turn into agreement may answer a moved query.
-                if cos >= min_cos - HOLD_TURN_COS {
+                if cos >= min_cos - HOLD_TURN {
                     found.keep(d2, first + k);
                 }
                 if d2 > g2 || cos < min_cos {
@@ -314,9 +312,9 @@ impl MatchTarget {
     }
 }
 
-/// A query's normal may turn by this much (radians, which bound the change of its cosine
-/// with any other unit normal) before a [`Hold`] lapses.
-const HOLD_TURN_COS: f64 = 0.05;
+/// A [`Hold`] lapses once the query's normal turns by this much, radians; the turn bounds the
+/// change of its cosine with any other unit normal, so this is also that cosine's slack.
+const HOLD_TURN: f64 = 0.05;
 
 /// The nearest points a search keeps for [`MatchTarget::recheck`].
 const KEEP: usize = 3;
@@ -327,8 +325,8 @@ pub(super) struct Nearest {
     /// Squared distance and index of the nearest point within the gate whose normal agrees.
     pub(super) best: Option<(f64, usize)>,
     /// The nearest points (squared distance, index; nearest first; infinite distance for
-    /// none) that answer or could after a turn of the normal by less than `HOLD_TURN_COS`,
-    /// whatever the gate. No such point outside them lies nearer than the last.
+    /// none) that answer or could after a turn of the normal by less than `HOLD_TURN`,
+    /// whatever the gate. No other such point of the searched cells lies nearer than the last.
     kept: [(f64, usize); KEEP],
     /// Distance from the query within which every cell was searched, metres.
     covered_m: f64,
@@ -364,7 +362,8 @@ impl Nearest {
 }
 
 /// What a search saw around its query: the nearest points (indices into `sorted`) that
-/// answer or could after a small turn, and the distance within which no other point lies.
+/// answer or could after a small turn, and the distance within which no other point that
+/// could answer lies.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(super) struct Hold {
     kept: [usize; KEEP],
@@ -384,7 +383,7 @@ impl MatchTarget {
         gate: f64,
         min_cos: f64,
     ) -> Option<usize> {
-        if turn_rad.abs() >= HOLD_TURN_COS - 1e-9 {
+        if gate.is_nan() || gate < 0.0 || turn_rad.abs() >= HOLD_TURN - 1e-9 {
             return None;
         }
         let g2 = gate * gate;
@@ -549,6 +548,13 @@ mod tests {
                     None => declined += 1,
                 }
             }
+        }
+        // Unmoved, a recheck gives the search's answer; under a gate no search accepts, none.
+        let (q, n) = ([0.003, 0.52], [0.0, 1.0]);
+        let (k, hold) = t.nearest_held(q, n, 0.3, MIN_COS, None).unwrap();
+        assert_eq!(t.recheck(&hold, (q, n), (0.0, 0.0), 0.3, MIN_COS), Some(k));
+        for gate in [-0.1, f64::NAN] {
+            assert_eq!(t.recheck(&hold, (q, n), (0.0, 0.0), gate, MIN_COS), None);
         }
         // Many answers, some of them another kept point than the first search's, and many
         // moves declined (beyond what the kept points prove).
