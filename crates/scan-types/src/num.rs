@@ -64,6 +64,10 @@ mod tests {
             -2147483648.0,
             -2147483648.5,
             -2147483649.0,
+            -2.5,
+            -2.0,
+            3.999,
+            1e15 + 0.5,
         ];
         // The four floats just inside a few integers, either sign.
         for k in [-3.0f64, -1.0, 1.0, 7.0, 1e6] {

@@ -81,10 +81,7 @@ impl ScoreGrid {
                 let k = (y - cy + r) as usize * kernel.stride;
                 let src = &patch[k + (x0 - cx + r) as usize..=k + (x1 - cx + r) as usize];
                 let start = y as usize * width;
-                let dst = &mut base[start + x0 as usize..=start + x1 as usize];
-                for (d, s) in dst.iter_mut().zip(src) {
-                    *d = (*d).max(*s);
-                }
+                max_assign(&mut base[start + x0 as usize..=start + x1 as usize], src);
             }
         }
         base.truncate(width * height);

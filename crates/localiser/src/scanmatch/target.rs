@@ -268,11 +268,14 @@ impl MatchTarget {
         let x1 = floor(fx + r);
         let y1 = floor(fy + r);
         if x1 < 0.0 || y1 < 0.0 {
+            // The block misses the grid: nothing was searched.
+            found.covered_m = 0.0;
             return found;
         }
         let x0 = floor(fx - r).max(0.0);
         let y0 = floor(fy - r).max(0.0);
         if x0 > wmax || y0 > hmax {
+            found.covered_m = 0.0;
             return found;
         }
         let (x1, y1) = (x1.min(wmax), y1.min(hmax));
