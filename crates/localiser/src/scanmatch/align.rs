@@ -111,7 +111,7 @@ impl MatchTarget {
                 h.k = k;
             } else {
                 *hint = self
-                    .nearest_held(q, n_cur, gate, min_cos, hint.map(|h| h.k))
+                    .nearest_held(q, n_cur, gate, min_cos, hint.and_then(|h| h.k))
                     .map(|(k, hold)| Held {
                         k,
                         q,
@@ -119,7 +119,7 @@ impl MatchTarget {
                         hold,
                     });
             }
-            let Some(m) = hint.map(|h| &self.sorted[h.k]) else {
+            let Some(m) = hint.and_then(|h| h.k).map(|k| &self.sorted[k]) else {
                 continue;
             };
             let r = m.n[0] * (q[0] - m.p[0]) + m.n[1] * (q[1] - m.p[1]);
@@ -144,11 +144,11 @@ impl MatchTarget {
     }
 }
 
-/// A point's match, where the search for it was made (query point and heading) and how far
-/// that answer holds: while it does, the search is not repeated.
+/// A point's match (or that it has none), where the search for it was made (query point and
+/// heading) and how far that answer holds: while it does, the search is not repeated.
 #[derive(Debug, Clone, Copy)]
 struct Held {
-    k: usize,
+    k: Option<usize>,
     q: [f64; 2],
     theta: f64,
     hold: Hold,

@@ -183,9 +183,10 @@ impl MatchTarget {
     }
 
     /// The reference point nearest `q` within `gate` whose normal agrees with `n`, as an
-    /// index into `sorted`, given the index of a point `hint` that is probably near `q` (the
-    /// match of the previous iteration); with what [`Self::recheck`] needs to answer for a
-    /// query moved a little without searching again.
+    /// index into `sorted` (`None`: there is none), given the index of a point `hint` that is
+    /// probably near `q` (the match of the previous iteration); with what [`Self::recheck`]
+    /// needs to answer for a query moved a little without searching again. `None` when
+    /// nothing could be searched (an empty index, a query or gate that is not a number).
     ///
     /// First searches the cells within `min(gate, NEAR_M, distance to the hint)` of `q`: a
     /// point found there nearer than that radius is the nearest overall (every point
@@ -198,7 +199,7 @@ impl MatchTarget {
         gate: f64,
         min_cos: f64,
         hint: Option<usize>,
-    ) -> Option<(usize, Hold)> {
+    ) -> Option<(Option<usize>, Hold)> {
         if self.width == 0 || !is_finite2(q) || gate.is_nan() || gate < 0.0 {
             return None;
         }
@@ -218,7 +219,7 @@ impl MatchTarget {
         let mut whole = None;
         loop {
             let found = self.nearest_in(q, n, reach, gate, min_cos);
-            let answer = || found.best.map(|(_, k)| (k, found.hold()));
+            let answer = || Some((found.best.map(|(_, k)| k), found.hold()));
             if reach >= gate || whole.is_some_and(|w| reach >= w) {
                 return answer();
             }
@@ -375,9 +376,11 @@ pub(super) struct Hold {
 }
 
 impl MatchTarget {
-    /// The point [`Self::nearest_held`] would answer for a query `moved_m` from the one whose
-    /// search gave `hold` and its normal turned by `turn_rad`, when the kept points prove it
-    /// (one lies nearer than anything else can); `None` when they do not: search again.
+    /// What [`Self::nearest_held`] would answer (a point, or `Some(None)`: no point) for a
+    /// query `moved_m` from the one whose search gave `hold` and its normal turned by
+    /// `turn_rad`, when the kept points prove it: one lies nearer than anything else can, or
+    /// none answers and nothing else can lie within the gate. `None` when they do not: search
+    /// again.
     pub(super) fn recheck(
         &self,
         hold: &Hold,
@@ -385,7 +388,7 @@ impl MatchTarget {
         (moved_m, turn_rad): (f64, f64),
         gate: f64,
         min_cos: f64,
-    ) -> Option<usize> {
+    ) -> Option<Option<usize>> {
         if gate.is_nan() || gate < 0.0 || turn_rad.abs() >= HOLD_TURN - 1e-9 {
             return None;
         }
@@ -402,9 +405,12 @@ impl MatchTarget {
                 best = Some((d2, k));
             }
         }
-        let (d2, k) = best?;
         // Every point not kept lies at least `limit_m - moved_m` from the moved query.
-        (d2.sqrt() + moved_m < hold.limit_m - 1e-9).then_some(k)
+        let beyond = hold.limit_m - moved_m - 1e-9;
+        match best {
+            Some((d2, k)) => (d2.sqrt() < beyond).then_some(Some(k)),
+            None => (gate < beyond).then_some(None),
+        }
     }
 }
 
@@ -438,7 +444,8 @@ mod tests {
             (gate, min_cos): (f64, f64),
             hint: Option<usize>,
         ) -> Option<usize> {
-            self.nearest_held(q, n, gate, min_cos, hint).map(|(k, _)| k)
+            self.nearest_held(q, n, gate, min_cos, hint)
+                .and_then(|(k, _)| k)
         }
     }
 
@@ -519,6 +526,8 @@ mod tests {
         let (t, mut noise) = segments_and_scatter();
         let mut uniform = || noise.uniform();
         let (mut answered, mut other_point, mut declined) = (0, 0, 0);
+        // Proven empty: searches that found nothing, and matches that no longer answer.
+        let (mut none_held, mut none_lost) = (0, 0);
         for _ in 0..4000 {
             // Queries near the segments (where kept points crowd) and anywhere.
             let q = if uniform() < 0.5 {
@@ -530,9 +539,7 @@ mod tests {
             let gate = [0.06, 0.12, 0.3][(uniform() * 3.0) as usize];
             let hint = Some((uniform() * t.len() as f64) as usize);
             let n = [a.cos(), a.sin()];
-            let Some((k, hold)) = t.nearest_held(q, n, gate, MIN_COS, hint) else {
-                continue;
-            };
+            let (k, hold) = t.nearest_held(q, n, gate, MIN_COS, hint).unwrap();
             // Moves of up to 3 cm and turns of up to 4 deg, under the same or a narrower gate.
             for _ in 0..20 {
                 let (m, dir) = (0.03 * uniform().powi(3), uniform() * std::f64::consts::TAU);
@@ -544,9 +551,17 @@ mod tests {
                 match t.recheck(&hold, (q2, n2), (moved, turn), gate2, MIN_COS) {
                     Some(got) => {
                         answered += 1;
-                        other_point += usize::from(got != k);
+                        match (k, got) {
+                            (None, None) => none_held += 1,
+                            (Some(_), None) => none_lost += 1,
+                            (k, got) => other_point += usize::from(got != k),
+                        }
                         let want = brute_force(&t, q2, n2, gate2);
-                        assert_eq!(Some(&t.sorted[got]), want, "{q:?} -> {q2:?}, turn {turn}");
+                        assert_eq!(
+                            got.map(|g| &t.sorted[g]),
+                            want,
+                            "{q:?} -> {q2:?}, turn {turn}"
+                        );
                     }
                     None => declined += 1,
                 }
@@ -555,16 +570,31 @@ mod tests {
         // Unmoved, a recheck gives the search's answer; under a gate no search accepts, none.
         let (q, n) = ([0.003, 0.52], [0.0, 1.0]);
         let (k, hold) = t.nearest_held(q, n, 0.3, MIN_COS, None).unwrap();
+        assert!(k.is_some());
         assert_eq!(t.recheck(&hold, (q, n), (0.0, 0.0), 0.3, MIN_COS), Some(k));
         for gate in [-0.1, f64::NAN] {
             assert_eq!(t.recheck(&hold, (q, n), (0.0, 0.0), gate, MIN_COS), None);
         }
-        // Many answers, some of them another kept point than the first search's, and many
-        // moves declined (beyond what the kept points prove).
+        // Facing away from every segment 1 cm above the upper one: no match, and none for a
+        // small move either.
+        let (q, n) = ([0.0, 0.51], [0.0, -1.0]);
+        let near_scatter = t.points.iter().any(|o| {
+            (o.p[0] - q[0]).hypot(o.p[1] - q[1]) < 0.1 && o.n[0] * n[0] + o.n[1] * n[1] >= 0.4
+        });
+        assert!(!near_scatter);
+        let (k, hold) = t.nearest_held(q, n, 0.06, MIN_COS, None).unwrap();
+        assert_eq!(k, None);
+        assert_eq!(
+            t.recheck(&hold, ([0.0, 0.515], n), (0.005, 0.0), 0.06, MIN_COS),
+            Some(None)
+        );
+        // Many answers, some of them another kept point than the first search's, some proven
+        // empty, and many moves declined (beyond what the kept points prove).
         assert!(
             answered > 5_000 && other_point > 200 && declined > 5_000,
             "{answered} {other_point} {declined}"
         );
+        assert!(none_held > 10_000 && none_lost > 1_000, "{none_held} {none_lost}");
     }
 
     #[test]
