@@ -634,16 +634,21 @@ impl FrontEnd {
         while self.keyframes.len() > self.params.submap_keyframes {
             self.keyframes.pop_front();
         }
-        let all: Vec<[f64; 2]> = self
-            .keyframes
-            .iter()
-            .flat_map(|k| k.points.iter().copied())
-            .collect();
+        let mut all = Vec::with_capacity(self.keyframes.iter().map(|k| k.points.len()).sum());
+        for k in &self.keyframes {
+            all.extend_from_slice(&k.points);
+        }
         let p = &self.params;
         let window_cells = (p.linear_window_m / p.resolution_m).ceil() as usize + 1;
         self.grid = ScoreGrid::new(&all, p.resolution_m, p.smoothing_m, p.depth, window_cells);
         if p.refine {
             self.target = MatchTarget::new();
+            self.target.reserve(
+                self.keyframes
+                    .iter()
+                    .filter_map(|k| k.target.as_ref().map(MatchTarget::len))
+                    .sum(),
+            );
             for k in self.keyframes.iter().rev() {
                 if let Some(t) = &k.target {
                     self.target.add_target(&k.pose, t);

@@ -65,6 +65,11 @@ impl MatchTarget {
         self.points.is_empty()
     }
 
+    /// Makes room for `additional` more reference points.
+    pub fn reserve(&mut self, additional: usize) {
+        self.points.reserve(additional);
+    }
+
     /// Adds the hits of `scan` taken at `pose` (in the target's frame) that have a surface normal.
     pub fn add_scan(
         &mut self,
