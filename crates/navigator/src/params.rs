@@ -582,7 +582,7 @@ impl Params {
             navigator: LoopParams {
                 max_legs: 400,
                 min_legs: 60,
-                legs_per_m: 4.0,
+                legs_per_m: 12.0,
                 goal_tolerance_m: 0.15,
                 max_failed_tries: 8,
                 recovery_turn_deg: 60.0,
@@ -621,6 +621,8 @@ impl Params {
         c.localiser.travel_rule = TravelRule::Landmark;
         c.localiser.revisit = false;
         c.navigator.skip_turn_below_deg = 0.0;
+        // Its greedy rule loops where a wall blocks it: more legs only lengthen the loop.
+        c.navigator.legs_per_m = 4.0;
         c
     }
 
@@ -888,7 +890,7 @@ mod tests {
 
     #[test]
     fn the_leg_limit_grows_with_the_distance_to_the_target() {
-        let g = Params::goalseek();
+        let g = Params::paper();
         let o = WorldPoint::new(0.0, 0.0);
         // 4 legs per metre: 30 m allows 120 legs; 10 m (40) keeps the floor of 60; 200 m
         // (800) is capped at 400.
@@ -896,6 +898,11 @@ mod tests {
         assert_eq!(g.leg_limit(o, WorldPoint::new(6.0, 8.0)), 60);
         assert_eq!(g.leg_limit(o, WorldPoint::new(15.1, 0.0)), 61);
         assert_eq!(g.leg_limit(o, WorldPoint::new(200.0, 0.0)), 400);
+        // goalseek's 12 per metre: 10 m allows 120 legs, 4 m keeps the floor, 40 m the cap.
+        let s = Params::goalseek();
+        assert_eq!(s.leg_limit(o, WorldPoint::new(6.0, 8.0)), 120);
+        assert_eq!(s.leg_limit(o, WorldPoint::new(4.0, 0.0)), 60);
+        assert_eq!(s.leg_limit(o, WorldPoint::new(40.0, 0.0)), 400);
         // A cap below the floor wins (a test's max_legs = 1).
         let mut one = g.clone();
         one.navigator.max_legs = 1;

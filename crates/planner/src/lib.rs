@@ -213,6 +213,11 @@ const GRADED_GAIN_M: f64 = 1.0;
 pub const GAP_VERDICTS: usize = 3;
 /// Two measured gap middles closer than this are the same gap, metres.
 const GAP_SAME_M: f64 = 0.25;
+/// How far along the field's path from the robot gaps are measured on the scan, metres.
+const PINCH_LOOK_M: f64 = 2.0;
+/// The nearest hits on either side of a gap's middle lie across it: the cosine of the angle
+/// between them, seen from there, is below this (about 154 deg).
+const PINCH_ACROSS_COS: f64 = -0.9;
 
 /// The tightest spot of a leg through a narrow passage.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -731,7 +736,63 @@ impl Planner {
                 narrow: Some(spot),
             });
         }
+        // The field may also lead through a gap that no ray takes at all.
+        if let Some(mid) = self.pinch_on_path(pose) {
+            push_near(&mut too_narrow, mid);
+        }
         self.judge_gaps(&too_narrow, &wide_enough);
+    }
+
+    /// The middle of a gap narrower than [`PlannerParams::narrowest_m`] that the field's path
+    /// from the robot crosses within [`PINCH_LOOK_M`], measured on the scan where the path
+    /// runs through the band: a gap the band's coarse cells leave open though the robot
+    /// cannot pass it (narrower than 2 r, no ray reaches through it).
+    fn pinch_on_path(&self, pose: &Pose2) -> Option<WorldPoint> {
+        let p = &self.params;
+        let reach = 2.0 * (p.robot_radius_m + p.margin_m);
+        let path = self.memory.descent(pose.position(), PINCH_LOOK_M);
+        for w in path.windows(2) {
+            if !self.memory.is_in_band(w[1]) {
+                continue;
+            }
+            let (a, b) = (
+                pose.inverse_transform_point(w[0]),
+                pose.inverse_transform_point(w[1]),
+            );
+            let (ux, uy) = (b.x_m() - a.x_m(), b.y_m() - a.y_m());
+            // Per side of the path: the three nearest distances and the nearest hit.
+            let mut sides = [([f64::INFINITY; 3], [0.0; 2]); 2];
+            for h in &self.narrow_hits {
+                let (dx, dy) = (h[0] - b.x_m(), h[1] - b.y_m());
+                let d = dx.hypot(dy);
+                if d > reach {
+                    continue;
+                }
+                let (best, at) = &mut sides[usize::from(ux * dy - uy * dx > 0.0)];
+                if d < best[2] {
+                    if d < best[0] {
+                        *at = *h;
+                    }
+                    best[2] = d;
+                    best.sort_unstable_by(f64::total_cmp);
+                }
+            }
+            let [(right3, rh), (left3, lh)] = sides;
+            if !(left3[2].is_finite() && right3[2].is_finite()) {
+                continue;
+            }
+            // The nearest hits on either side lie across the point (a gap), not both
+            // toward one corner it rounds.
+            let (l, r) = ([lh[0] - b.x_m(), lh[1] - b.y_m()], [rh[0] - b.x_m(), rh[1] - b.y_m()]);
+            let across = (l[0] * r[0] + l[1] * r[1]) / (l[0].hypot(l[1]) * r[0].hypot(r[1]));
+            let width = left3.iter().sum::<f64>() / 3.0 + right3.iter().sum::<f64>() / 3.0;
+            if across < PINCH_ACROSS_COS && width < p.narrowest_m() {
+                tracing::trace!(width_m = width, "gap on the path too narrow");
+                let mid = RobotPoint::new((lh[0] + rh[0]) / 2.0, (lh[1] + rh[1]) / 2.0);
+                return Some(pose.transform_point(mid));
+            }
+        }
+        None
     }
 
     /// The path length from `end` to the target on the memory, metres: the smaller of the

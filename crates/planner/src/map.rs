@@ -636,6 +636,52 @@ impl ObstacleMemory {
         Some(d + f64::from(BAND_FACTOR - 1) * band_m)
     }
 
+    /// Cell centres along the steepest descent of the current field from `p` toward its
+    /// target, for up to `max_m` of path; empty when the field is stale or `p` has no path.
+    pub fn descent(&self, p: WorldPoint, max_m: f64) -> Vec<WorldPoint> {
+        let mut path = Vec::new();
+        let Some(mut c) = self.cell_of(p) else {
+            return path;
+        };
+        if self.field_key.map(|k| k.0) != Some(self.version) {
+            return path;
+        }
+        let open = |k: usize| self.field[k] != UNREACHED && !self.closed(k);
+        let neighbours = |c: usize, reach: i64| {
+            let (col, row) = ((c % self.width) as i64, (c / self.width) as i64);
+            (-reach..=reach)
+                .flat_map(move |dy| (-reach..=reach).map(move |dx| (col + dx, row + dy)))
+                .filter(|&(x, y)| x >= 0 && y >= 0)
+                .filter(|&(x, y)| x < self.width as i64 && y < self.height as i64)
+                .map(|(x, y)| (y * self.width as i64 + x) as usize)
+                .filter(move |&k| k != c && open(k))
+        };
+        // A point right at an obstacle's edge starts from the best open cell next to it.
+        if !open(c) {
+            let Some(k) = neighbours(c, 2).min_by_key(|&k| self.field[k]) else {
+                return path;
+            };
+            c = k;
+            let (x, y) = self.centre_of(c);
+            path.push(WorldPoint::new(x, y));
+        }
+        let mut length_m = 0.0;
+        while length_m < max_m && self.field[c] > 0 {
+            let Some(next) = neighbours(c, 1)
+                .filter(|&k| self.field[k] < self.field[c])
+                .min_by_key(|&k| self.field[k])
+            else {
+                break;
+            };
+            let diagonal = next % self.width != c % self.width && next / self.width != c / self.width;
+            length_m += self.resolution_m * if diagonal { std::f64::consts::SQRT_2 } else { 1.0 };
+            c = next;
+            let (x, y) = self.centre_of(c);
+            path.push(WorldPoint::new(x, y));
+        }
+        path
+    }
+
     /// Path length from `p` to the target of the last field, metres; `None` when no path is
     /// known or the memory changed since the field was computed. A point in a blocked cell (right at the edge of an obstacle) takes the best free
     /// cell next to it plus the straight distance to that cell's centre.
@@ -768,9 +814,25 @@ mod tests {
         assert!(through > 4.4, "{through}");
         assert!(m.is_blocked(WorldPoint::new(0.0, 0.2)));
         assert!(!m.is_blocked(WorldPoint::new(0.0, 0.5)));
+        // The descent goes around an end of the wall to the target, through open cells, no
+        // shorter than the way around an end and no longer than the field says (it may cut a
+        // corner the wavefront does not).
+        let path = m.descent(WorldPoint::new(0.0, -1.0), 50.0);
+        let last = *path.last().unwrap();
+        assert!(last.distance_m(&WorldPoint::new(0.0, 1.0)) < 0.08, "{last:?}");
+        assert!(path.iter().all(|p| !m.is_blocked(*p)));
+        assert!(path.iter().any(|p| p.x_m().abs() > 2.0));
+        let along: f64 = path.windows(2).map(|w| w[0].distance_m(&w[1])).sum();
+        assert!(along > 4.47 && along < through + 0.01, "{along} {through}");
+        // Cut at the length asked for, within a step.
+        let short = m.descent(WorldPoint::new(0.0, -1.0), 1.0);
+        let along: f64 = short.windows(2).map(|w| w[0].distance_m(&w[1])).sum();
+        assert!(along < 1.0 && along > 0.8, "{along}");
         // Unchanged memory and target: no recomputation.
         assert!(!m.update_field(WorldPoint::new(0.0, 1.0)));
         m.add_hit(WorldPoint::new(5.0, 5.0));
+        // A field computed before the memory changed gives no descent.
+        assert!(m.descent(WorldPoint::new(0.0, -1.0), 50.0).is_empty());
         assert!(m.update_field(WorldPoint::new(0.0, 1.0)));
     }
 

@@ -516,3 +516,52 @@ fn a_scan_added_for_a_check_only_is_not_remembered() {
             .is_none()
     );
 }
+
+/// A gap narrower than the robot (0.58 m for r = 0.3 m): no ray reaches through it, yet the
+/// memory's 0.1 m cells leave a channel open through the band (centred on a cell). Measured on
+/// the scan where the map's path crosses it, it is closed after `GAP_VERDICTS` plans; a 0.7 m
+/// door stays open.
+#[test]
+fn a_gap_no_ray_passes_is_closed_on_the_map() {
+    let g = ScanGeometry::paper();
+    let mut expander = Expander::new(&g);
+    let x = 0.05;
+    let pose = Pose2::new(x, 0.2, FRAC_PI_2);
+    let target = WorldPoint::new(x, 3.0);
+    let middle = WorldPoint::new(x, 1.0);
+    for (width, closes) in [(0.58, true), (0.7, false)] {
+        let half = width / 2.0;
+        let world = room(&[((-5.0, 1.0), (x - half, 1.0)), ((x + half, 1.0), (5.0, 1.0))]);
+        let mut planner = Planner::new(PlannerParams::default());
+        let scan = scan_at(&world, &g, &pose);
+        planner.add_scan(&pose, &g, &scan);
+        let (mut full, mut narrow) = (vec![0.0; g.ray_count], vec![0.0; g.ray_count]);
+        expander.clearances(&scan, RADIUS_M + MARGIN_M, &mut full);
+        expander.clearances(&scan, RADIUS_M, &mut narrow);
+        let mut plans = Vec::new();
+        for k in 1..=planner::GAP_VERDICTS + 2 {
+            assert_eq!(
+                planner.memory().is_blocked(middle),
+                closes && k > planner::GAP_VERDICTS,
+                "{width} m gap, plan {k}"
+            );
+            plans.push(planner.plan_graded(
+                &pose,
+                &g,
+                &scan,
+                &full,
+                Some((&scan, &narrow)),
+                target,
+            ));
+        }
+        // Toward the 0.7 m door, straight ahead, every time.
+        if !closes {
+            assert!(
+                plans
+                    .iter()
+                    .all(|p| matches!(p, Plan::Go { alpha_rad, .. } if alpha_rad.abs() < 0.01)),
+                "{plans:?}"
+            );
+        }
+    }
+}
