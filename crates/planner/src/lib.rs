@@ -783,7 +783,10 @@ impl Planner {
             }
             // The nearest hits on either side lie across the point (a gap), not both
             // toward one corner it rounds.
-            let (l, r) = ([lh[0] - b.x_m(), lh[1] - b.y_m()], [rh[0] - b.x_m(), rh[1] - b.y_m()]);
+            let (l, r) = (
+                [lh[0] - b.x_m(), lh[1] - b.y_m()],
+                [rh[0] - b.x_m(), rh[1] - b.y_m()],
+            );
             let across = (l[0] * r[0] + l[1] * r[1]) / (l[0].hypot(l[1]) * r[0].hypot(r[1]));
             let width = left3.iter().sum::<f64>() / 3.0 + right3.iter().sum::<f64>() / 3.0;
             if across < PINCH_ACROSS_COS && width < p.narrowest_m() {

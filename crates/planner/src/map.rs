@@ -673,8 +673,14 @@ impl ObstacleMemory {
             else {
                 break;
             };
-            let diagonal = next % self.width != c % self.width && next / self.width != c / self.width;
-            length_m += self.resolution_m * if diagonal { std::f64::consts::SQRT_2 } else { 1.0 };
+            let diagonal =
+                next % self.width != c % self.width && next / self.width != c / self.width;
+            length_m += self.resolution_m
+                * if diagonal {
+                    std::f64::consts::SQRT_2
+                } else {
+                    1.0
+                };
             c = next;
             let (x, y) = self.centre_of(c);
             path.push(WorldPoint::new(x, y));
@@ -819,7 +825,10 @@ mod tests {
         // corner the wavefront does not).
         let path = m.descent(WorldPoint::new(0.0, -1.0), 50.0);
         let last = *path.last().unwrap();
-        assert!(last.distance_m(&WorldPoint::new(0.0, 1.0)) < 0.08, "{last:?}");
+        assert!(
+            last.distance_m(&WorldPoint::new(0.0, 1.0)) < 0.08,
+            "{last:?}"
+        );
         assert!(path.iter().all(|p| !m.is_blocked(*p)));
         assert!(path.iter().any(|p| p.x_m().abs() > 2.0));
         let along: f64 = path.windows(2).map(|w| w[0].distance_m(&w[1])).sum();

@@ -531,7 +531,10 @@ fn a_gap_no_ray_passes_is_closed_on_the_map() {
     let middle = WorldPoint::new(x, 1.0);
     for (width, closes) in [(0.58, true), (0.7, false)] {
         let half = width / 2.0;
-        let world = room(&[((-5.0, 1.0), (x - half, 1.0)), ((x + half, 1.0), (5.0, 1.0))]);
+        let world = room(&[
+            ((-5.0, 1.0), (x - half, 1.0)),
+            ((x + half, 1.0), (5.0, 1.0)),
+        ]);
         let mut planner = Planner::new(PlannerParams::default());
         let scan = scan_at(&world, &g, &pose);
         planner.add_scan(&pose, &g, &scan);

@@ -599,7 +599,10 @@ mod tests {
             answered > 5_000 && other_point > 200 && declined > 5_000,
             "{answered} {other_point} {declined}"
         );
-        assert!(none_held > 10_000 && none_lost > 1_000, "{none_held} {none_lost}");
+        assert!(
+            none_held > 10_000 && none_lost > 1_000,
+            "{none_held} {none_lost}"
+        );
     }
 
     #[test]
