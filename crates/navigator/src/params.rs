@@ -119,6 +119,12 @@ pub struct PlanningParams {
     /// without the key.
     #[serde(default)]
     pub line_of_sight: bool,
+    /// map_path with graded clearance: where the map's path runs through the band, the gap it
+    /// crosses is measured on the scan and closed when narrower than a narrow leg takes (a
+    /// gap no ray passes, which the map's coarse cells may leave open). Off in a stored
+    /// configuration without the key.
+    #[serde(default)]
+    pub measure_path_gaps: bool,
 }
 
 /// Landmark detection and selection.
@@ -525,6 +531,7 @@ impl Params {
                 // Off: measured no better (docs/navigator.md, "Replanning while driving").
                 replan_step_m: 0.0,
                 line_of_sight: true,
+                measure_path_gaps: true,
             },
             landmarks: LandmarkParams {
                 neighbour_n: 1,
@@ -613,6 +620,7 @@ impl Params {
         c.planner.remember_turned_away_hits = false;
         c.planner.replan_step_m = 0.0;
         c.planner.line_of_sight = false;
+        c.planner.measure_path_gaps = false;
         c.landmarks.range_limit_margin_m = 0.0;
         c.tracking.gate_m = 0.2;
         c.tracking.round_centre = false;
@@ -789,6 +797,7 @@ impl Params {
             margin_m: self.robot.expansion_margin_m,
             narrow_margin_m: self.robot.narrow_margin_m,
             line_of_sight: self.planner.line_of_sight,
+            measure_path_gaps: self.planner.measure_path_gaps,
             min_travel_m: self.planner.min_travel_m,
             max_travel_m: self.planner.max_leg_m,
             grid_resolution_m: self.planner.grid_resolution_m,
@@ -854,10 +863,9 @@ mod tests {
         let n = stored["navigator"].as_object_mut().unwrap();
         n.remove("skip_turn_below_deg");
         n.remove("skip_turn_max_hits");
-        stored["planner"]
-            .as_object_mut()
-            .unwrap()
-            .remove("line_of_sight");
+        let planner = stored["planner"].as_object_mut().unwrap();
+        planner.remove("line_of_sight");
+        planner.remove("measure_path_gaps");
         let t = stored["tracking"].as_object_mut().unwrap();
         t.remove("round_centre");
         t.remove("reject_near_range_limit");
@@ -871,6 +879,8 @@ mod tests {
         assert_eq!(old.navigator.skip_turn_max_hits, 60);
         // The grid path alone ranks the rays.
         assert!(!old.planner.line_of_sight && !old.planner_params().line_of_sight);
+        // Gaps on the map's path are not measured.
+        assert!(!old.planner.measure_path_gaps && !old.planner_params().measure_path_gaps);
         // Travel measured on a landmark's edge hit.
         assert!(!old.tracking.round_centre);
         // Landmarks re-identified at the range limit too.
@@ -883,6 +893,7 @@ mod tests {
         back.localiser.ray_shift_max_sigmas = 3.0;
         back.navigator.skip_turn_below_deg = g.navigator.skip_turn_below_deg;
         back.planner.line_of_sight = true;
+        back.planner.measure_path_gaps = true;
         back.tracking.round_centre = true;
         back.tracking.reject_near_range_limit = true;
         assert_eq!(back, g);

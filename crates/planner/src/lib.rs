@@ -87,6 +87,9 @@ pub struct PlannerParams {
     /// ranked by its straight-line distance, not its grid path (whose 8 directions would pick
     /// a ray up to 22.5 deg off the target's bearing in the open).
     pub line_of_sight: bool,
+    /// Graded clearance only: a gap the field's path crosses in the band is measured on the
+    /// scan and closed when narrower than [`PlannerParams::narrowest_m`], as a narrow leg's is.
+    pub measure_path_gaps: bool,
 }
 
 impl Default for PlannerParams {
@@ -104,6 +107,7 @@ impl Default for PlannerParams {
             grid_resolution_m: 0.1,
             narrow_margin_m: 0.025,
             line_of_sight: true,
+            measure_path_gaps: true,
         }
     }
 }
@@ -737,7 +741,12 @@ impl Planner {
             });
         }
         // The field may also lead through a gap that no ray takes at all.
-        if let Some(mid) = self.pinch_on_path(pose) {
+        if let Some(mid) = self
+            .params
+            .measure_path_gaps
+            .then(|| self.pinch_on_path(pose))
+            .flatten()
+        {
             push_near(&mut too_narrow, mid);
         }
         self.judge_gaps(&too_narrow, &wide_enough);
