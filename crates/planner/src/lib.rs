@@ -769,24 +769,15 @@ impl Planner {
                 pose.inverse_transform_point(w[1]),
             );
             let (ux, uy) = (b.x_m() - a.x_m(), b.y_m() - a.y_m());
-            // Per side of the path: the three nearest distances and the nearest hit.
-            let mut sides = [([f64::INFINITY; 3], [0.0; 2]); 2];
+            let mut sides = Sides::default();
             for h in &self.narrow_hits {
                 let (dx, dy) = (h[0] - b.x_m(), h[1] - b.y_m());
                 let d = dx.hypot(dy);
-                if d > reach {
-                    continue;
-                }
-                let (best, at) = &mut sides[usize::from(ux * dy - uy * dx > 0.0)];
-                if d < best[2] {
-                    if d < best[0] {
-                        *at = *h;
-                    }
-                    best[2] = d;
-                    best.sort_unstable_by(f64::total_cmp);
+                if d <= reach {
+                    sides.add(*h, d, ux * dy - uy * dx > 0.0);
                 }
             }
-            let [(right3, rh), (left3, lh)] = sides;
+            let Sides([(right3, rh), (left3, lh)]) = sides;
             if !(left3[2].is_finite() && right3[2].is_finite()) {
                 continue;
             }
@@ -890,19 +881,11 @@ impl Planner {
             let (x, y) = (t * u[0], t * u[1]);
             // Per side: the nearest hit, and the three nearest distances (their mean measures
             // the passage without the low bias that range noise gives the nearest alone).
-            let mut sides = [([f64::INFINITY; 3], [0.0; 2]); 2];
+            let mut sides = Sides::default();
             for (h, is_left) in &near {
-                let d = (h[0] - x).hypot(h[1] - y);
-                let (best, at) = &mut sides[usize::from(*is_left)];
-                if d < best[2] {
-                    if d < best[0] {
-                        *at = *h;
-                    }
-                    best[2] = d;
-                    best.sort_unstable_by(f64::total_cmp);
-                }
+                sides.add(*h, (h[0] - x).hypot(h[1] - y), *is_left);
             }
-            let [(right3, rh), (left3, lh)] = sides;
+            let Sides([(right3, rh), (left3, lh)]) = sides;
             let d = left3[0].min(right3[0]);
             if d < spot.clearance_m {
                 spot.at = WorldPoint::new(t, 0.0);
@@ -1009,6 +992,31 @@ impl Planner {
             target_in_view: true,
             narrow: None,
         })
+    }
+}
+
+/// Per side of a line (right, then left): the three nearest distances, ascending (infinite
+/// for none), and the nearest hit.
+#[derive(Debug, Clone, Copy)]
+struct Sides([([f64; 3], [f64; 2]); 2]);
+
+impl Default for Sides {
+    fn default() -> Self {
+        Self([([f64::INFINITY; 3], [0.0; 2]); 2])
+    }
+}
+
+impl Sides {
+    /// Counts hit `h` at distance `d` on its side.
+    fn add(&mut self, h: [f64; 2], d: f64, left: bool) {
+        let (best, at) = &mut self.0[usize::from(left)];
+        if d < best[2] {
+            if d < best[0] {
+                *at = h;
+            }
+            best[2] = d;
+            best.sort_unstable_by(f64::total_cmp);
+        }
     }
 }
 
