@@ -755,11 +755,12 @@ impl Planner {
     /// The middle of a gap narrower than [`PlannerParams::narrowest_m`] that the field's path
     /// from the robot crosses within [`PINCH_LOOK_M`], measured on the scan where the path
     /// runs through the band: a gap the band's coarse cells leave open though the robot
-    /// cannot pass it (narrower than 2 r, no ray reaches through it).
+    /// cannot pass it (no wider than 2 r, no ray reaches through it).
     fn pinch_on_path(&self, pose: &Pose2) -> Option<WorldPoint> {
         let p = &self.params;
         let reach = 2.0 * (p.robot_radius_m + p.margin_m);
-        let path = self.memory.descent(pose.position(), PINCH_LOOK_M);
+        let mut path = vec![pose.position()];
+        path.extend(self.memory.descent(pose.position(), PINCH_LOOK_M));
         for w in path.windows(2) {
             if !self.memory.is_in_band(w[1]) {
                 continue;

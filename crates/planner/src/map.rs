@@ -637,7 +637,8 @@ impl ObstacleMemory {
     }
 
     /// Cell centres along the steepest descent of the current field from `p` toward its
-    /// target, for up to `max_m` of path; empty when the field is stale or `p` has no path.
+    /// target (`p`'s own cell left out), until the path reaches `max_m` (within a step);
+    /// empty when the field is stale or `p` has no path.
     pub fn descent(&self, p: WorldPoint, max_m: f64) -> Vec<WorldPoint> {
         let mut path = Vec::new();
         let Some(mut c) = self.cell_of(p) else {

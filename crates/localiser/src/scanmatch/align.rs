@@ -38,8 +38,8 @@ impl MatchTarget {
         let mut iterations = 0;
         let mut last = None;
         let mut prev_step = None;
-        // Each point's match in the previous iteration (a hint for the next search), with
-        // where its search was made and how far that answer holds.
+        // Each point's match (or that it had none) in the previous iteration, a hint for the
+        // next search, with where its search was made and how far that answer holds.
         let mut matched: Vec<Option<Held>> = vec![None; cur.len()];
         for it in 0..params.max_iterations.max(1) {
             iterations = it + 1;
