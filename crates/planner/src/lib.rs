@@ -759,16 +759,16 @@ impl Planner {
     fn pinch_on_path(&self, pose: &Pose2) -> Option<WorldPoint> {
         let p = &self.params;
         let reach = 2.0 * (p.robot_radius_m + p.margin_m);
-        let mut path = vec![pose.position()];
-        path.extend(self.memory.descent(pose.position(), PINCH_LOOK_M));
+        // The path from the robot, robot frame, with whether each point lies in the band.
+        let path: Vec<(RobotPoint, bool)> = std::iter::once(pose.position())
+            .chain(self.memory.descent(pose.position(), PINCH_LOOK_M))
+            .map(|p| (pose.inverse_transform_point(p), self.memory.is_in_band(p)))
+            .collect();
         for w in path.windows(2) {
-            if !self.memory.is_in_band(w[1]) {
+            let ((a, _), (b, in_band)) = (w[0], w[1]);
+            if !in_band {
                 continue;
             }
-            let (a, b) = (
-                pose.inverse_transform_point(w[0]),
-                pose.inverse_transform_point(w[1]),
-            );
             let (ux, uy) = (b.x_m() - a.x_m(), b.y_m() - a.y_m());
             let mut sides = Sides::default();
             for h in &self.narrow_hits {
