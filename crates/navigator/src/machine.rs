@@ -163,6 +163,8 @@ pub struct Navigator {
     revisits: Revisits,
     /// The leg of the last revisit correction (0: none yet).
     last_revisit_leg: usize,
+    /// Plans made beside a target that the memory's lethal clearance covers.
+    blocked_target_seen: usize,
     /// Legs ended early by `[planner] replan_step_m`.
     legs_cut_short: usize,
 }
@@ -241,6 +243,7 @@ impl Navigator {
             sigma_position_m: 0.0,
             revisits: Revisits::default(),
             last_revisit_leg: 0,
+            blocked_target_seen: 0,
             legs_cut_short: 0,
         })
     }
@@ -413,6 +416,7 @@ impl Navigator {
         self.goal = goal;
         self.end = None;
         self.legs_before_goal = self.legs;
+        self.blocked_target_seen = 0;
         self.leg_limit = self.params.leg_limit(self.estimate.position(), goal);
         self.failures = 0;
         self.narrow_misses = 0;
@@ -490,8 +494,9 @@ impl Navigator {
     /// The top of a cycle: stop, or expand, plan and start the turn onto the chosen ray.
     fn plan_next(&mut self, scan: Scan) -> Action {
         let to_goal = self.estimate.position().distance_m(&self.goal);
+        let beside = self.beside_blocked_target(to_goal);
         let n = &self.params.navigator;
-        if to_goal <= n.goal_tolerance_m {
+        if to_goal <= n.goal_tolerance_m || beside.is_some() {
             if n.flag_uncertain_arrival && self.sigma_position_m > n.arrival_max_sigma_m {
                 let note = format!(
                     "the estimate reached the target but its position uncertainty is {:.2} m (more than {:.2} m)",
@@ -499,10 +504,8 @@ impl Navigator {
                 );
                 return self.finish(Reason::UncertainArrival, note);
             }
-            return self.finish(
-                Reason::Reached,
-                "estimate within tolerance of the target".into(),
-            );
+            let note = beside.unwrap_or_else(|| "estimate within tolerance of the target".into());
+            return self.finish(Reason::Reached, note);
         }
         if self.legs - self.legs_before_goal >= self.leg_limit {
             let note = format!(
@@ -511,7 +514,7 @@ impl Navigator {
             );
             return self.finish(Reason::LegLimit, note);
         }
-        if self.failures >= n.max_failed_tries {
+        if self.failures >= self.params.navigator.max_failed_tries {
             let note = format!(
                 "no way toward the target after {} tries ({to_goal:.2} m away)",
                 self.failures
@@ -597,6 +600,37 @@ impl Navigator {
                 self.start_turn(turn, scan, AfterTurn::Replan)
             }
         }
+    }
+
+    /// `[navigator] blocked_target_plans`: the note of an arrival at the nearest place the
+    /// robot may stand, when the target lies within a mapped obstacle's clearance and the
+    /// robot has planned that often within `goal_tolerance_m` of that place.
+    fn beside_blocked_target(&mut self, to_goal: f64) -> Option<String> {
+        let n = &self.params.navigator;
+        if n.blocked_target_plans == 0 {
+            return None;
+        }
+        // The planner approaches a target with the full expansion: its centre stays this far
+        // from every hit (the narrow radius is for passages).
+        let radius_m = self.params.expansion_radius_m();
+        let free_m = self
+            .planner
+            .memory()
+            .nearest_hit_m(self.goal, radius_m)
+            .map_or(0.0, |d| radius_m - d);
+        if free_m <= n.goal_tolerance_m {
+            self.blocked_target_seen = 0;
+            return None;
+        }
+        if to_goal > free_m + n.goal_tolerance_m {
+            return None;
+        }
+        self.blocked_target_seen += 1;
+        (self.blocked_target_seen >= n.blocked_target_plans).then(|| {
+            format!(
+                "stopped {to_goal:.2} m from the target by the estimate, at the nearest place clear of the map's obstacles (the target lies {free_m:.2} m inside their clearance)"
+            )
+        })
     }
 
     /// Whether the turn onto a ray `alpha_rad` off the heading can be left out: it is small,

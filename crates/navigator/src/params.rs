@@ -471,6 +471,12 @@ pub struct LoopParams {
     /// The largest position uncertainty of a claimed arrival, metres.
     #[serde(default = "default_arrival_max_sigma_m")]
     pub arrival_max_sigma_m: f64,
+    /// A target that lies within a mapped obstacle's clearance (`expansion_margin_m` beyond
+    /// r), farther than `goal_tolerance_m` from any place the robot may stand, counts as
+    /// reached after this many plans made within `goal_tolerance_m` of the nearest such place;
+    /// 0: never (also what a stored configuration without the key means).
+    #[serde(default)]
+    pub blocked_target_plans: usize,
 }
 
 fn default_arrival_max_sigma_m() -> f64 {
@@ -605,6 +611,7 @@ impl Params {
                 stall_legs: 2,
                 flag_uncertain_arrival: false,
                 arrival_max_sigma_m: default_arrival_max_sigma_m(),
+                blocked_target_plans: 3,
             },
         }
     }
@@ -631,6 +638,7 @@ impl Params {
         c.navigator.skip_turn_below_deg = 0.0;
         // Its greedy rule loops where a wall blocks it: more legs only lengthen the loop.
         c.navigator.legs_per_m = 4.0;
+        c.navigator.blocked_target_plans = 0;
         c
     }
 
@@ -751,6 +759,7 @@ impl Params {
             ("navigator.stall_share", n.stall_share, 0.0, 1.0, false),
             ("navigator.stall_legs", count(n.stall_legs), 1.0, 1000.0, false),
             ("navigator.arrival_max_sigma_m", n.arrival_max_sigma_m, 0.0, 100.0, true),
+            ("navigator.blocked_target_plans", count(n.blocked_target_plans), 0.0, 1000.0, false),
         ];
         table
     }

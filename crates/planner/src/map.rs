@@ -144,6 +144,38 @@ impl ObstacleMemory {
         self.cell_of(p).is_some_and(|c| self.blocked[c] > 0)
     }
 
+    /// Distance from `p` to the centre of the nearest cell holding a hit, searched within
+    /// `max_m`, metres; `None` when there is none.
+    pub fn nearest_hit_m(&self, p: WorldPoint, max_m: f64) -> Option<f64> {
+        if max_m.is_nan() || max_m < 0.0 || self.width == 0 {
+            return None;
+        }
+        let fx = (p.x_m() - self.origin.0) / self.resolution_m;
+        let fy = (p.y_m() - self.origin.1) / self.resolution_m;
+        let reach = max_m / self.resolution_m + 1.0;
+        let clamp = |v: f64, n: usize| v.clamp(0.0, n as f64 - 1.0) as usize;
+        let (x0, x1) = (clamp(fx - reach, self.width), clamp(fx + reach, self.width));
+        let (y0, y1) = (
+            clamp(fy - reach, self.height),
+            clamp(fy + reach, self.height),
+        );
+        let mut best: Option<f64> = None;
+        for y in y0..=y1 {
+            for x in x0..=x1 {
+                let c = y * self.width + x;
+                if self.hits[c] == 0 {
+                    continue;
+                }
+                let (cx, cy) = self.centre_of(c);
+                let d = (cx - p.x_m()).hypot(cy - p.y_m());
+                if d <= max_m && best.is_none_or(|b| d < b) {
+                    best = Some(d);
+                }
+            }
+        }
+        best
+    }
+
     /// Remembers a world-frame hit point.
     pub fn add_hit(&mut self, p: WorldPoint) {
         self.count_hit(p);
@@ -940,5 +972,21 @@ mod tests {
         assert!(graded.is_blocked(WorldPoint::new(0.15, 0.05)));
         assert!(!graded.is_in_band(WorldPoint::new(0.05, 0.15)));
         assert!(full.is_blocked(gap) && !full.is_in_band(gap));
+    }
+    #[test]
+    fn the_nearest_hit_is_the_nearest_hit_cell_centre() {
+        // A wall of hits on the cell centres of row 0 (y = 0.05), x from -2.95 to 2.95.
+        let mut m = ObstacleMemory::new(0.1, 0.3);
+        for k in -30..30 {
+            m.add_hit(WorldPoint::new(k as f64 * 0.1 + 0.05, 0.05));
+        }
+        let d = m.nearest_hit_m(WorldPoint::new(0.05, 0.22), 1.0).unwrap();
+        assert!((d - 0.17).abs() < 1e-9, "{d}");
+        // Past the wall's end at x = 2.95: 0.5 m along x, 0.3 m along y.
+        let d = m.nearest_hit_m(WorldPoint::new(3.45, 0.35), 1.0).unwrap();
+        assert!((d - 0.34f64.sqrt()).abs() < 1e-9, "{d}");
+        assert_eq!(m.nearest_hit_m(WorldPoint::new(3.45, 0.35), 0.5), None);
+        assert_eq!(m.nearest_hit_m(WorldPoint::new(50.0, 0.0), 1.0), None);
+        assert_eq!(m.nearest_hit_m(WorldPoint::new(0.05, 0.05), f64::NAN), None);
     }
 }
