@@ -163,7 +163,7 @@ pub struct Navigator {
     revisits: Revisits,
     /// The leg of the last revisit correction (0: none yet).
     last_revisit_leg: usize,
-    /// Plans made beside a target that the memory's lethal clearance covers.
+    /// Cycles begun beside a target inside a mapped obstacle's clearance.
     blocked_target_seen: usize,
     /// Legs ended early by `[planner] replan_step_m`.
     legs_cut_short: usize,

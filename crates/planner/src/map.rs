@@ -973,6 +973,7 @@ mod tests {
         assert!(!graded.is_in_band(WorldPoint::new(0.05, 0.15)));
         assert!(full.is_blocked(gap) && !full.is_in_band(gap));
     }
+
     #[test]
     fn the_nearest_hit_is_the_nearest_hit_cell_centre() {
         // A wall of hits on the cell centres of row 0 (y = 0.05), x from -2.95 to 2.95.
