@@ -257,6 +257,11 @@ pub struct LocaliserParams {
     /// Gaussian fall-off of the SLAM submap's likelihood field around each point, metres.
     #[serde(default = "default_slam_smoothing_m")]
     pub slam_smoothing_m: f64,
+    /// SLAM's placement is combined with the rules' prediction, each weighed by its
+    /// information, so that the prediction holds what the scans leave free (along a
+    /// corridor). Off in a stored configuration without the key.
+    #[serde(default)]
+    pub slam_fuse_prediction: bool,
     /// Cell of the SLAM submap's likelihood field, metres.
     #[serde(default = "default_slam_resolution_m")]
     pub slam_resolution_m: f64,
@@ -411,6 +416,7 @@ impl LocaliserParams {
             min_quality: self.slam_min_quality,
             resolution_m: self.slam_resolution_m,
             smoothing_m: self.slam_smoothing_m,
+            fuse_located: self.slam_fuse_prediction,
             ..slam::FrontEndParams::default()
         }
     }
@@ -587,6 +593,7 @@ impl Params {
                 revisit_keyframes: default_revisit_keyframes(),
                 revisit_max_sigma_m: default_revisit_max_sigma_m(),
                 slam_smoothing_m: default_slam_smoothing_m(),
+                slam_fuse_prediction: true,
                 turn_sigma_deg: default_turn_sigma_deg(),
                 measured_turn_sigma_deg: default_measured_turn_sigma_deg(),
                 drive_sigma_share: default_drive_sigma_share(),

@@ -91,6 +91,9 @@ pub struct FrontEndParams {
     /// each weighed by its information, so that the prediction holds the directions the scan
     /// leaves free (along a corridor); false keeps the laser's pose alone.
     pub fuse_prediction: bool,
+    /// [`FrontEnd::locate_near`] also combines its answer with the prediction (under
+    /// `fuse_prediction`); false answers the laser's pose alone.
+    pub fuse_located: bool,
     /// The prediction's position standard deviation, metres ...
     pub prediction_sigma_m: f64,
     /// ... plus this share of the predicted step's length ...
@@ -133,6 +136,7 @@ impl Default for FrontEndParams {
             icp_stride: 2,
             icp_target_voxel_m: 0.0,
             fuse_prediction: true,
+            fuse_located: false,
             prediction_sigma_m: 0.002,
             prediction_sigma_per_m: 0.01,
             prediction_sigma_deg: 1.0,
@@ -378,8 +382,8 @@ impl FrontEnd {
         self.add_scan_from(geometry, scan, Some(prediction), true)
     }
 
-    /// Where the scan would be placed with the search centred on `prediction` (never fused
-    /// with it), without
+    /// Where the scan would be placed with the search centred on `prediction` (combined with
+    /// it only under [`FrontEndParams::fuse_located`]), without
     /// adding it: the caller decides the pose and adds the scan with [`FrontEnd::insert_at`]
     /// (an online user that refuses a placement keeps the submap in its own frame). Before
     /// the first insertion there is nothing to match: the answer is `prediction`, unrefined.
@@ -436,8 +440,9 @@ impl FrontEnd {
             .before_last
             .map_or(Pose2::default(), |b| b.inverse().compose(&last));
         let guess = prediction.unwrap_or_else(|| last.compose(&step));
-        // Only a placement that is kept is fused (`locate_near` answers the laser's pose).
-        let fuse_with = prediction.filter(|_| commit);
+        // A placement that is kept is fused; `locate_near` answers the laser's pose unless
+        // `fuse_located`.
+        let fuse_with = prediction.filter(|_| commit || self.params.fuse_located);
         if let Some((m, quality)) = self.local(geometry, scan, &points, guess) {
             let pose = self.fused(&m, fuse_with);
             let keyframe = self.is_keyframe(&pose);
@@ -746,9 +751,9 @@ mod tests {
     /// A 6 m x 4 m room with a box (every direction pinned), scans ray-cast at the truth: the
     /// second scan 0.05 m on, its prediction 0.02 m further along x. The refinement alone
     /// lands on the truth; fused, the pose moves toward the prediction by the prior's small
-    /// share, strictly between the two; `locate_near` never fuses.
+    /// share, strictly between the two; `locate_near` fuses only under `fuse_located`.
     #[test]
-    fn add_scan_near_fuses_and_locate_near_does_not() {
+    fn add_scan_near_fuses_and_locate_near_only_when_asked() {
         use scan_types::testkit::{boxed, scan_at};
         let mut walls = boxed(-3.0, -2.0, 3.0, 2.0);
         walls.extend(boxed(1.0, 0.5, 1.6, 1.1));
@@ -756,9 +761,10 @@ mod tests {
         let first = scan_at(&g, &walls, 0.0, 0.0, 0.0);
         let second = scan_at(&g, &walls, 0.05, 0.0, 0.0);
         let predicted = Pose2::new(0.07, 0.0, 0.0);
-        let place = |fuse_prediction: bool, locate: bool| {
+        let place_with = |fuse_prediction: bool, fuse_located: bool, locate: bool| {
             let mut fe = FrontEnd::new(FrontEndParams {
                 fuse_prediction,
+                fuse_located,
                 ..FrontEndParams::default()
             })
             .unwrap();
@@ -777,6 +783,8 @@ mod tests {
                 other => panic!("{other:?}"),
             }
         };
+        let place =
+            |fuse_prediction: bool, locate: bool| place_with(fuse_prediction, false, locate);
         let plain = place(false, false);
         assert!(
             (plain.x_m - 0.05).abs() < 0.005 && plain.y_m.abs() < 0.005,
@@ -793,6 +801,12 @@ mod tests {
         assert!(
             fused.x_m > plain.x_m && fused.x_m < predicted.x_m,
             "{fused:?} {plain:?}"
+        );
+        // Under `fuse_located` the located pose moves toward the prediction as well.
+        let located_fused = place_with(true, true, true);
+        assert!(
+            located_fused.x_m > located.x_m + 1e-4 && located_fused.x_m < predicted.x_m,
+            "{located_fused:?} {located:?}"
         );
     }
 
