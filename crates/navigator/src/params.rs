@@ -262,6 +262,12 @@ pub struct LocaliserParams {
     /// corridor). Off in a stored configuration without the key.
     #[serde(default)]
     pub slam_fuse_prediction: bool,
+    /// SLAM's refinement takes a hit's neighbours for a line when their variance across it
+    /// is at most this share of that along it (0..1): stricter than the 0.1 of the offline
+    /// `slam`, so that lines fitted around corners and posts do not pull each placement
+    /// along the motion. 0.1 in a stored configuration without the key.
+    #[serde(default = "default_slam_line_scatter")]
+    pub slam_line_scatter: f64,
     /// Cell of the SLAM submap's likelihood field, metres.
     #[serde(default = "default_slam_resolution_m")]
     pub slam_resolution_m: f64,
@@ -360,6 +366,10 @@ fn default_slam_keyframes() -> usize {
     60
 }
 
+fn default_slam_line_scatter() -> f64 {
+    0.1
+}
+
 fn default_drive_max_turn_deg() -> f64 {
     1.0
 }
@@ -417,6 +427,7 @@ impl LocaliserParams {
             resolution_m: self.slam_resolution_m,
             smoothing_m: self.slam_smoothing_m,
             fuse_located: self.slam_fuse_prediction,
+            icp_line_scatter: self.slam_line_scatter,
             ..slam::FrontEndParams::default()
         }
     }
@@ -594,6 +605,7 @@ impl Params {
                 revisit_max_sigma_m: default_revisit_max_sigma_m(),
                 slam_smoothing_m: default_slam_smoothing_m(),
                 slam_fuse_prediction: true,
+                slam_line_scatter: 0.03,
                 turn_sigma_deg: default_turn_sigma_deg(),
                 measured_turn_sigma_deg: default_measured_turn_sigma_deg(),
                 drive_sigma_share: default_drive_sigma_share(),
@@ -741,6 +753,7 @@ impl Params {
             ("localiser.slam_resolution_m", z.slam_resolution_m, 0.01, 1.0, false),
             ("localiser.slam_max_sigma_m", z.slam_max_sigma_m, 0.0, 10.0, true),
             ("localiser.slam_smoothing_m", z.slam_smoothing_m, 0.0, 1.0, true),
+            ("localiser.slam_line_scatter", z.slam_line_scatter, 0.0, 1.0, true),
             ("localiser.revisit_radius_m", z.revisit_radius_m, 0.0, 100.0, true),
             ("localiser.revisit_min_age_legs", count(z.revisit_min_age_legs), 1.0, 1e6, false),
             ("localiser.revisit_keyframes", count(z.revisit_keyframes), 1.0, 100.0, false),

@@ -85,6 +85,28 @@ fn slam_window_is_validated() {
     p.localiser.slam_window_deg = 120.0;
     let e = p.validate().unwrap_err().to_string();
     assert!(e.contains("localiser.slam_window_deg"), "{e}");
+    p.localiser.slam_window_deg = 8.0;
+    for bad in [0.0, 1.5] {
+        p.localiser.slam_line_scatter = bad;
+        let e = p.validate().unwrap_err().to_string();
+        assert!(e.contains("localiser.slam_line_scatter"), "{bad}: {e}");
+    }
+}
+
+#[test]
+fn a_stored_configuration_without_the_line_criterion_keeps_the_old_one() {
+    // Recordings made before `slam_line_scatter` re-run with the offline front end's 0.1.
+    let mut v = serde_json::to_value(Params::goalseek()).unwrap();
+    let localiser = v["localiser"].as_object_mut().unwrap();
+    assert_eq!(
+        localiser
+            .remove("slam_line_scatter")
+            .and_then(|x| x.as_f64()),
+        Some(0.03)
+    );
+    let old: Params = serde_json::from_value(v).unwrap();
+    assert_eq!(old.localiser.slam_line_scatter, 0.1);
+    assert_eq!(old.localiser.slam_front_end().icp_line_scatter, 0.1);
 }
 
 /// One straight leg in an empty 6 m x 4 m room, from (1, 2) facing +x to (3, 2), with

@@ -79,6 +79,10 @@ pub struct FrontEndParams {
     pub icp_surface_m: f64,
     /// ... or within this many ray spacings at their range (far hits of a wide scanner).
     pub icp_surface_spacings: f64,
+    /// A hit's neighbours form a line for the refinement when their variance across it is at
+    /// most this share of their variance along it (0..1; lower refuses the lines fitted
+    /// around corners and round posts, and with them the short faces of door jambs).
+    pub icp_line_scatter: f64,
     /// A refinement whose field score falls more than this below the correlative pose's is
     /// refused.
     pub max_refine_loss: f64,
@@ -132,6 +136,7 @@ impl Default for FrontEndParams {
             max_refine_shift_m: 0.2,
             icp_surface_m: 0.3,
             icp_surface_spacings: 3.0,
+            icp_line_scatter: 0.1,
             max_refine_loss: 0.05,
             icp_stride: 2,
             icp_target_voxel_m: 0.0,
@@ -192,6 +197,13 @@ impl FrontEndParams {
             |v| (0.0..=1.0).contains(&v),
             "must lie in 0..1",
         )?;
+        if !(self.icp_line_scatter > 0.0 && self.icp_line_scatter <= 1.0) {
+            return Err(bad(
+                "icp_line_scatter",
+                self.icp_line_scatter,
+                "must lie in (0, 1]",
+            ));
+        }
         if self.resolution_m < 0.01 || self.linear_window_m / self.resolution_m > 1000.0 {
             return Err(bad(
                 "resolution_m",
@@ -332,6 +344,7 @@ impl FrontEnd {
         params.validate()?;
         let surface_m = params.icp_surface_m;
         let surface_spacings = params.icp_surface_spacings;
+        let max_line_scatter = params.icp_line_scatter;
         let stride = params.icp_stride;
         Ok(Self {
             params,
@@ -341,6 +354,7 @@ impl FrontEnd {
                 surface_m,
                 surface_spacings,
                 normal_half_length_m: surface_m * 0.6,
+                max_line_scatter,
                 min_pairs: 30,
                 stride,
                 ..MatchParams::default()
@@ -810,6 +824,64 @@ mod tests {
         );
     }
 
+    /// Round posts and square pillars, no noise, placed online as the navigator does: the
+    /// search centred on the last estimate moved by the exact step, the answer combined with
+    /// it, the scan inserted where the estimate puts it. Any drift of the estimate is the
+    /// matcher's own. With the offline line criterion (0.1) lines fitted around the posts'
+    /// arcs and the pillars' corners pull every placement ahead; with 0.03 they are refused.
+    #[test]
+    fn a_strict_line_criterion_stops_the_lean_along_the_motion() {
+        use scan_types::testkit::{Seg, boxed, scan_at};
+        let mut world: Vec<Seg> = Vec::new();
+        for (cx, cy) in [(1.0, 1.5), (2.5, -1.2), (4.0, 1.8), (5.5, -1.5), (7.0, 1.3)] {
+            // A post of radius 0.15 m as a 64-gon.
+            let at = |k: usize| {
+                let a = std::f64::consts::TAU * k as f64 / 64.0;
+                (cx + 0.15 * a.cos(), cy + 0.15 * a.sin())
+            };
+            world.extend((0..64).map(|k| (at(k), at(k + 1))));
+        }
+        for (x, y) in [(1.8, -1.8), (4.7, 2.0), (7.8, -1.9)] {
+            world.extend(boxed(x, y, x + 0.4, y + 0.3));
+        }
+        let g = ScanGeometry::paper();
+        let step = 0.25;
+        let drift = |icp_line_scatter: f64| {
+            // The navigator's online settings (`[localiser] slam_*`).
+            let mut fe = FrontEnd::new(FrontEndParams {
+                icp_line_scatter,
+                linear_window_m: 0.3,
+                angular_window_deg: 8.0,
+                resolution_m: 0.05,
+                keyframe_distance_m: 0.5,
+                submap_keyframes: 60,
+                fuse_located: true,
+                ..FrontEndParams::default()
+            })
+            .unwrap();
+            let mut estimate = Pose2::default();
+            for k in 0..40 {
+                let scan = scan_at(&g, &world, step * k as f64, 0.0, 0.0);
+                if k > 0 {
+                    estimate = estimate.compose(&Pose2::new(step, 0.0, 0.0));
+                    if let Placement::Placed {
+                        pose,
+                        refined: true,
+                        ..
+                    } = fe.locate_near(&g, &scan, estimate)
+                    {
+                        estimate = pose;
+                    }
+                }
+                fe.insert_at(&g, &scan, estimate);
+            }
+            estimate.x_m - step * 39.0
+        };
+        let (strict, lenient) = (drift(0.03), drift(0.1));
+        assert!(strict.abs() < 0.005, "0.03: {strict} m after 9.75 m");
+        assert!(lenient > 0.02, "0.1: {lenient} m after 9.75 m");
+    }
+
     #[test]
     fn out_of_range_values_are_refused_by_name() {
         let with = |voxel: f64| {
@@ -847,6 +919,16 @@ mod tests {
             .validate()
         };
         assert!(sigmas([0.002, 0.0, 1.0, 0.0]).is_ok());
+        for bad in [0.0, -0.1, 1.5, f64::NAN] {
+            let e = FrontEndParams {
+                icp_line_scatter: bad,
+                ..FrontEndParams::default()
+            }
+            .validate()
+            .expect_err("refused")
+            .to_string();
+            assert!(e.contains("icp_line_scatter"), "{bad}: {e}");
+        }
         for (v, key) in [
             ([0.0, 0.01, 1.0, 0.05], "prediction_sigma_m"),
             ([f64::NAN, 0.01, 1.0, 0.05], "prediction_sigma_m"),

@@ -36,6 +36,9 @@ pub struct MatchParams {
     pub normal_half_length_m: f64,
     /// At most this many rays on each side enter the fit.
     pub normal_rays: usize,
+    /// A hit's fit is a line when the members' variance across it is at most this share of
+    /// their variance along it (members around a corner or a round post spread both ways).
+    pub max_line_scatter: f64,
     /// Matched normals must agree within this angle, radians (front and back of a thin wall).
     pub max_normal_angle_rad: f64,
     /// Every `stride`-th hit of the scan being aligned enters the fit, weighted `stride`
@@ -46,7 +49,8 @@ pub struct MatchParams {
 impl Default for MatchParams {
     /// 40 iterations, gate 0.3 m shrinking by 0.7 to 0.06 m, 2 cm Cauchy scale and point
     /// sigma, prior 0.1 m / 2 deg, 40 pairs, RMS at most 3 cm, each hit's surface line fitted
-    /// over +-0.1 m (at most 30 rays a side, neighbours within 0.15 m), normals within 60 deg,
+    /// over +-0.1 m (at most 30 rays a side, neighbours within 0.15 m, variance across at most
+    /// 0.1 of that along), normals within 60 deg,
     /// every second hit of the aligned scan.
     fn default() -> Self {
         Self {
@@ -64,6 +68,7 @@ impl Default for MatchParams {
             surface_spacings: 0.0,
             normal_half_length_m: 0.1,
             normal_rays: 30,
+            max_line_scatter: 0.1,
             max_normal_angle_rad: 60f64.to_radians(),
             stride: 2,
         }

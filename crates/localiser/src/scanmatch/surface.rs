@@ -48,7 +48,7 @@ pub(super) fn oriented_hits(
         if sums.0 < 3.0 {
             continue;
         }
-        if let Some(o) = fitted_surface(px, py, sums) {
+        if let Some(o) = fitted_surface(px, py, sums, params.max_line_scatter) {
             out.push(o);
         }
     }
@@ -96,11 +96,13 @@ fn surface_sums(
 }
 
 /// The hit at (`px`, `py`) moved onto the line fitted to its surface members (from their
-/// sums), with the line's normal toward the sensor; `None` when they do not form a line.
+/// sums), with the line's normal toward the sensor; `None` when they do not form a line (their
+/// variance across it above `max_scatter` times that along it).
 fn fitted_surface(
     px: f64,
     py: f64,
     (m, sx, sy, sxx, syy, sxy): (f64, f64, f64, f64, f64, f64),
+    max_scatter: f64,
 ) -> Option<Oriented> {
     // The members' mean relative to the hit, and their scatter about it.
     let (mx, my) = (sx / m, sy / m);
@@ -111,7 +113,7 @@ fn fitted_surface(
     let rad = (0.25 * (sxx - syy).powi(2) + sxy * sxy).sqrt();
     let (lmax, lmin) = (mean + rad, mean - rad);
     // Not a line: scattered points (a corner's tip or noise as large as the spread).
-    if lmax <= 0.0 || lmin > 0.1 * lmax {
+    if lmax <= 0.0 || lmin > max_scatter * lmax {
         return None;
     }
     // Direction of the fitted line: the principal axis, at half the angle a2 of (sxx -
