@@ -20,6 +20,10 @@ const DISAGREE_SIGMAS: f64 = 3.0;
 const ALONE_SHARE: f64 = 0.5;
 /// A match leaves the travel to the laser when its worst direction is known this well, metres.
 const CONSTRAINED_SIGMA_M: f64 = 0.05;
+/// A landmark's travel strays from the commands by more than this, metres ...
+const STRAY_M: f64 = 0.2;
+/// ... or this share of the commanded travel.
+const STRAY_SHARE: f64 = 0.3;
 
 /// What a leg is for.
 #[derive(Debug, Clone, Copy)]
@@ -214,15 +218,34 @@ impl Drive {
         let measured = self.measured_m();
         match self.key.as_mut() {
             Some((pose, at, target)) => {
-                let (rel, constrained) = matched(
-                    nav,
-                    target,
-                    pose,
-                    measured - *at,
-                    &self.last_scan,
-                    &self.match_params,
-                );
-                self.laser_measured = constrained;
+                let scan = &self.last_scan;
+                let (mut rel, mut sigma) =
+                    matched(nav, target, pose, measured - *at, scan, &self.match_params);
+                // A landmark whose travel strays far from the commands may be a feature that
+                // moves with the robot (where a wall leaves the range or the view): it stands
+                // only when the scans pin that travel down; else the commands seed the match.
+                let gap = self.commanded_m - measured;
+                let confirm = nav.params.localiser.stray_landmark_max_sigma_m;
+                if confirm > 0.0
+                    && gap.abs() > STRAY_M.max(STRAY_SHARE * self.commanded_m)
+                    && sigma.is_none_or(|s| s > confirm)
+                {
+                    let (r, s) = matched(
+                        nav,
+                        target,
+                        pose,
+                        measured - *at + gap,
+                        scan,
+                        &self.match_params,
+                    );
+                    tracing::debug!(
+                        landmark_m = measured,
+                        commanded_m = self.commanded_m,
+                        "the landmark's travel strays from the commands and the scans do not confirm it"
+                    );
+                    (rel, sigma) = (r, s);
+                }
+                self.laser_measured = sigma.is_some_and(|s| s <= CONSTRAINED_SIGMA_M);
                 rel
             }
             None => {
@@ -331,7 +354,8 @@ fn log_round(c: &Circle) {
 /// The pose of `scan` relative to the start of the drive: matched against `target` (the
 /// reference scan taken at `key`), starting from `key` advanced by `ahead_m` and from shares
 /// of it (the base may have stalled or slipped); the guess itself when no match succeeds.
-/// The flag is true when the match pinned the travel down.
+/// With it, how well the match's data pin the position in the worst direction (one standard
+/// deviation, metres; `None` without a match).
 fn matched(
     nav: &Navigator,
     target: &mut MatchTarget,
@@ -339,7 +363,7 @@ fn matched(
     ahead_m: f64,
     scan: &Scan,
     params: &MatchParams,
-) -> (Pose2, bool) {
+) -> (Pose2, Option<f64>) {
     let guess = Pose2::new(ahead_m, 0.0, 0.0);
     // The guess is as good as the drive: its error grows with the distance.
     let l = &nav.params.localiser;
@@ -399,14 +423,11 @@ fn matched(
                 pairs = m.pairs,
                 "scan match"
             );
-            (
-                key.compose(&m.pose),
-                m.data_worst_sigma_m <= CONSTRAINED_SIGMA_M,
-            )
+            (key.compose(&m.pose), Some(m.data_worst_sigma_m))
         }
         None => {
             tracing::debug!(ahead_m, "scan match failed; keeping the landmark's travel");
-            (key.compose(&guess), false)
+            (key.compose(&guess), None)
         }
     }
 }

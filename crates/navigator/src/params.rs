@@ -268,6 +268,13 @@ pub struct LocaliserParams {
     /// along the motion. 0.1 in a stored configuration without the key.
     #[serde(default = "default_slam_line_scatter")]
     pub slam_line_scatter: f64,
+    /// A leg whose landmark measured a travel more than 0.2 m and 30 % away from the commands
+    /// keeps it only when the scan match pins that travel to this, metres; else the match
+    /// starts from the commands (a feature that moves with the robot, where a wall leaves the
+    /// range, looks like a stall). 0: the landmark's travel stands, as in a stored
+    /// configuration without the key.
+    #[serde(default)]
+    pub stray_landmark_max_sigma_m: f64,
     /// Cell of the SLAM submap's likelihood field, metres.
     #[serde(default = "default_slam_resolution_m")]
     pub slam_resolution_m: f64,
@@ -606,6 +613,7 @@ impl Params {
                 slam_smoothing_m: default_slam_smoothing_m(),
                 slam_fuse_prediction: true,
                 slam_line_scatter: 0.03,
+                stray_landmark_max_sigma_m: 0.01,
                 turn_sigma_deg: default_turn_sigma_deg(),
                 measured_turn_sigma_deg: default_measured_turn_sigma_deg(),
                 drive_sigma_share: default_drive_sigma_share(),
@@ -654,6 +662,7 @@ impl Params {
         c.localiser.heading_rule = HeadingRule::Commanded;
         c.localiser.travel_rule = TravelRule::Landmark;
         c.localiser.revisit = false;
+        c.localiser.stray_landmark_max_sigma_m = 0.0;
         c.navigator.skip_turn_below_deg = 0.0;
         // Its greedy rule loops where a wall blocks it: more legs only lengthen the loop.
         c.navigator.legs_per_m = 4.0;
@@ -754,6 +763,7 @@ impl Params {
             ("localiser.slam_max_sigma_m", z.slam_max_sigma_m, 0.0, 10.0, true),
             ("localiser.slam_smoothing_m", z.slam_smoothing_m, 0.0, 1.0, true),
             ("localiser.slam_line_scatter", z.slam_line_scatter, 0.0, 1.0, true),
+            ("localiser.stray_landmark_max_sigma_m", z.stray_landmark_max_sigma_m, 0.0, 1.0, false),
             ("localiser.revisit_radius_m", z.revisit_radius_m, 0.0, 100.0, true),
             ("localiser.revisit_min_age_legs", count(z.revisit_min_age_legs), 1.0, 1e6, false),
             ("localiser.revisit_keyframes", count(z.revisit_keyframes), 1.0, 100.0, false),

@@ -187,10 +187,18 @@ fn a_landmark_at_the_range_limit_gives_no_fix() {
     // of range, which moves with the robot. Re-identified there, it measured 0.52 m for a
     // 0.99 m drive (the scan match failed: nothing else in range), and the run claimed
     // arrival 0.37 m from the target.
-    let sliding = run(188, |p| p.tracking.reject_near_range_limit = false);
+    let sliding = run(188, |p| {
+        p.tracking.reject_near_range_limit = false;
+        p.localiser.stray_landmark_max_sigma_m = 0.0;
+    });
     assert_eq!(sliding.reason, Reason::FalseArrival, "{}", sliding.note);
     assert!(sliding.final_position_error_m.unwrap() > 0.3);
     let clear = run(188, |_| {});
     assert!(clear.reached, "{}", clear.note);
     assert!(clear.final_position_error_m.unwrap() < 0.1);
+    // The landmark's 0.52 m strays from the 0.99 m commanded by more than 0.2 m and 30 %, and
+    // no scan match confirms it: `stray_landmark_max_sigma_m` alone also keeps the commands.
+    let unconfirmed = run(188, |p| p.tracking.reject_near_range_limit = false);
+    assert!(unconfirmed.reached, "{}", unconfirmed.note);
+    assert!(unconfirmed.final_position_error_m.unwrap() < 0.1);
 }

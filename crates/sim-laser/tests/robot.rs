@@ -65,7 +65,7 @@ fn range_noise_has_the_preset_sigma() {
         .collect();
     let sd = std_dev(&errs);
     assert!((sd - 0.01).abs() < 0.001, "sigma {sd}");
-    // URG-04LX: 1 % of 3 m beyond 1 m.
+    // URG-04LX: 0.3 % of 3 m beyond 1 m.
     let mut s = Simulation::new(
         wall_world(),
         SensorPreset::Urg04lx,
@@ -82,7 +82,7 @@ fn range_noise_has_the_preset_sigma() {
         .map(|_| s.next_scan().unwrap().ranges_m[c] - 3.0)
         .collect();
     let sd = std_dev(&errs);
-    assert!((sd - 0.03).abs() < 0.003, "sigma {sd}");
+    assert!((sd - 0.009).abs() < 0.0009, "sigma {sd}");
 }
 
 #[test]
