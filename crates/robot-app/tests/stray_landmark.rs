@@ -3,38 +3,24 @@
 //! and it stays 5.4 m ahead while the robot drives 1 m toward it.
 
 use std::path::Path;
-use std::process::Command;
 
 use serde_json::Value;
 
-const BIN: &str = env!("CARGO_BIN_EXE_robot-app");
+#[path = "common/sim_run.rs"]
+mod sim_run;
 
-/// `summary.json` of simple_rooms pair 59 of the 60-pair batch (noise seed 59) with `config`.
+/// `summary.json` of simple_rooms pair 59 of the 60-pair batch (noise seed 59) with the
+/// URG-04LX preset and `config`.
 fn run(dir: &Path, name: &str, config: &str) -> Value {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
-    let cfg = dir.join(format!("{name}.toml"));
-    std::fs::write(&cfg, config).unwrap();
-    let out = dir.join(name);
-    let o = Command::new(BIN)
-        .args(["-q", "sim", "--world"])
-        .arg(root.join("sim/floorplans/simple_rooms.toml"))
-        .args([
-            "--seed",
-            "59",
-            "--sensor",
-            "urg-04lx",
-            "--start=6.25,1.8500000000000005,148.47890463531806",
-            "--goal=-0.8499999999999996,2.450000000000001",
-            "--config",
-        ])
-        .arg(&cfg)
-        .arg("--out")
-        .arg(&out)
-        .output()
-        .unwrap();
-    let s = std::fs::read(out.join("summary.json"))
-        .unwrap_or_else(|e| panic!("{e}: {}", String::from_utf8_lossy(&o.stderr)));
-    serde_json::from_slice(&s).unwrap()
+    let args = [
+        "--seed",
+        "59",
+        "--sensor",
+        "urg-04lx",
+        "--start=6.25,1.8500000000000005,148.47890463531806",
+        "--goal=-0.8499999999999996,2.450000000000001",
+    ];
+    sim_run::summary(dir, name, "simple_rooms", &args, config)
 }
 
 #[test]

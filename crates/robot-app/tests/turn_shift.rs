@@ -2,43 +2,30 @@
 //! room (issue 15): Stage's sal2 with its blocks' insides free.
 
 use std::path::Path;
-use std::process::Command;
 
 use serde_json::Value;
 
-const BIN: &str = env!("CARGO_BIN_EXE_robot-app");
+#[path = "common/sim_run.rs"]
+mod sim_run;
 
 /// `summary.json` of sal2-open pair 7 of the 60-pair batch (noise seed 7) with `config`.
 fn run(dir: &Path, name: &str, config: &str) -> Value {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
-    let cfg = dir.join(format!("{name}.toml"));
-    std::fs::write(&cfg, config).unwrap();
-    let out = dir.join(name);
-    let o = Command::new(BIN)
-        .args(["-q", "sim", "--world"])
-        .arg(root.join("sim/floorplans/sal2-open.toml"))
-        .args([
-            "--seed",
-            "7",
-            "--start=-6.825,1.375,-93.11586544734222",
-            "--goal=4.575,3.075",
-            "--config",
-        ])
-        .arg(&cfg)
-        .arg("--out")
-        .arg(&out)
-        .output()
-        .unwrap();
-    let s = std::fs::read(out.join("summary.json"))
-        .unwrap_or_else(|e| panic!("{e}: {}", String::from_utf8_lossy(&o.stderr)));
-    serde_json::from_slice(&s).unwrap()
+    let args = [
+        "--seed",
+        "7",
+        "--start=-6.825,1.375,-93.11586544734222",
+        "--goal=4.575,3.075",
+    ];
+    sim_run::summary(dir, name, "sal2-open", &args, config)
 }
 
 #[test]
 #[allow(clippy::print_stdout)]
 fn a_ray_shift_far_from_the_command_needs_the_match() {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
-    if !root.join("../shared/worlds/stage/sal2.png").exists() {
+    if !sim_run::root()
+        .join("../shared/worlds/stage/sal2.png")
+        .exists()
+    {
         println!("skipping: ../shared/worlds/stage/sal2.png not found");
         return;
     }

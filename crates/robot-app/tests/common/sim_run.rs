@@ -1,0 +1,34 @@
+//! One `robot-app sim` run on a shared floor plan, for tests that replay a batch pair.
+
+use std::path::Path;
+use std::process::Command;
+
+use serde_json::Value;
+
+const BIN: &str = env!("CARGO_BIN_EXE_robot-app");
+
+/// The repository's root.
+pub fn root() -> std::path::PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+/// `summary.json` of `robot-app sim --world sim/floorplans/WORLD.toml ARGS --config` with
+/// `config` written to `dir/NAME.toml`, its outputs in `dir/NAME`.
+pub fn summary(dir: &Path, name: &str, world: &str, args: &[&str], config: &str) -> Value {
+    let cfg = dir.join(format!("{name}.toml"));
+    std::fs::write(&cfg, config).unwrap();
+    let out = dir.join(name);
+    let o = Command::new(BIN)
+        .args(["-q", "sim", "--world"])
+        .arg(root().join(format!("sim/floorplans/{world}.toml")))
+        .args(args)
+        .arg("--config")
+        .arg(&cfg)
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    let s = std::fs::read(out.join("summary.json"))
+        .unwrap_or_else(|e| panic!("{e}: {}", String::from_utf8_lossy(&o.stderr)));
+    serde_json::from_slice(&s).unwrap()
+}
