@@ -7,7 +7,7 @@
 use std::str::FromStr;
 
 use landmarks::{DetectParams, SelectParams, TrackParams};
-use scan_types::WorldPoint;
+use scan_types::{ScanGeometry, WorldPoint};
 use serde::{Deserialize, Serialize};
 
 use crate::NavigatorError;
@@ -137,6 +137,12 @@ pub struct LandmarkParams {
     pub max_bearing_deg: f64,
     /// Hits closer than this to the maximum range are not landmarks (range-limit artefacts), metres.
     pub range_limit_margin_m: f64,
+    /// ... or than this many of the range gaps between neighbouring hits on a wall 1 m to the
+    /// side at the maximum range (r_max^2 times the ray spacing, per metre), when that is more:
+    /// a longer-ranged scanner's last hit on a receding wall lies farther inside its limit. 0
+    /// (a configuration without the key): the margin alone.
+    #[serde(default)]
+    pub range_limit_gaps: f64,
     /// Also use occlusion edges (range jumps between two hits).
     pub occlusion_edges: bool,
     /// Also select corners (two straight arms meeting at an angle) as landmarks; the paper
@@ -567,6 +573,7 @@ impl Params {
                 neighbour_n: 1,
                 max_bearing_deg: 90.0,
                 range_limit_margin_m: 0.15,
+                range_limit_gaps: 1.5,
                 occlusion_edges: false,
                 corners: false,
                 min_jump_m: 0.5,
@@ -656,6 +663,7 @@ impl Params {
         c.planner.line_of_sight = false;
         c.planner.measure_path_gaps = false;
         c.landmarks.range_limit_margin_m = 0.0;
+        c.landmarks.range_limit_gaps = 0.0;
         c.tracking.gate_m = 0.2;
         c.tracking.round_centre = false;
         c.tracking.reject_near_range_limit = false;
@@ -735,6 +743,7 @@ impl Params {
             ("landmarks.neighbour_n", count(l.neighbour_n), 1.0, 100.0, false),
             ("landmarks.max_bearing_deg", l.max_bearing_deg, 0.0, 180.0, true),
             ("landmarks.range_limit_margin_m", l.range_limit_margin_m, 0.0, 10.0, false),
+            ("landmarks.range_limit_gaps", l.range_limit_gaps, 0.0, 100.0, false),
             ("landmarks.min_jump_m", l.min_jump_m, 0.0, 10.0, true),
             ("landmarks.min_ob_m", l.min_ob_m, 0.0, 10.0, false),
             ("landmarks.min_cb_m", l.min_cb_m, 0.0, 10.0, false),
@@ -792,6 +801,23 @@ impl Params {
             ("navigator.blocked_target_plans", count(n.blocked_target_plans), 0.0, 1000.0, false),
         ];
         table
+    }
+
+    /// [`Params::landmark_params`] for a scanner of `geometry`: the range-limit margin grown
+    /// to `[landmarks] range_limit_gaps` of its range gaps when that is more.
+    pub fn landmark_params_for(
+        &self,
+        geometry: &ScanGeometry,
+    ) -> (DetectParams, SelectParams, TrackParams) {
+        let (mut detect, select, mut track) = self.landmark_params();
+        let l = &self.landmarks;
+        if detect.reject_near_range_limit {
+            let gap_m = geometry.max_range_m.powi(2) * geometry.increment_rad.abs();
+            let margin = l.range_limit_margin_m.max(l.range_limit_gaps * gap_m);
+            detect.range_limit_margin_m = margin;
+            track.detect.range_limit_margin_m = margin;
+        }
+        (detect, select, track)
     }
 
     /// Landmark detection, selection and tracking parameters: the method's preset with the
@@ -861,6 +887,7 @@ fn invalid(key: &'static str, value: impl ToString, requirement: &str) -> Naviga
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::f64::consts::TAU;
 
     #[test]
     fn presets_differ_where_the_paper_differs() {
@@ -908,7 +935,18 @@ mod tests {
         let t = stored["tracking"].as_object_mut().unwrap();
         t.remove("round_centre");
         t.remove("reject_near_range_limit");
+        stored["landmarks"]
+            .as_object_mut()
+            .unwrap()
+            .remove("range_limit_gaps");
+        stored["localiser"]
+            .as_object_mut()
+            .unwrap()
+            .remove("stray_landmark_max_sigma_m");
         let old: Params = serde_json::from_value(stored).unwrap();
+        // The fixed range-limit margin; a landmark's travel always stands.
+        assert_eq!(old.landmarks.range_limit_gaps, 0.0);
+        assert_eq!(old.localiser.stray_landmark_max_sigma_m, 0.0);
         // The matcher's own heading prior (2 deg), every turn made.
         assert_eq!(old.localiser.drive_turn_sigma_deg, 2.0);
         assert_eq!(old.localiser.partial_travel_max_sigma_m, 0.05);
@@ -935,7 +973,36 @@ mod tests {
         back.planner.measure_path_gaps = true;
         back.tracking.round_centre = true;
         back.tracking.reject_near_range_limit = true;
+        back.landmarks.range_limit_gaps = 1.5;
+        back.localiser.stray_landmark_max_sigma_m = 0.01;
         assert_eq!(back, g);
+    }
+
+    #[test]
+    fn the_range_limit_margin_grows_with_the_scanner_range() {
+        let g = Params::goalseek();
+        let margin = |geometry: &ScanGeometry| {
+            g.landmark_params_for(geometry)
+                .2
+                .detect
+                .range_limit_margin_m
+        };
+        // The paper's 4 m, 240 deg / 684 steps: 1.5 x 16 x 0.00612 = 0.147 m, under 0.15 m.
+        assert_eq!(margin(&ScanGeometry::paper()), 0.15);
+        // The URG-04LX's 5.6 m, 2 pi / 1024 steps: 1.5 x 31.36 x 0.006136 = 0.2886 m.
+        let urg = ScanGeometry::new(-340.0 * TAU / 1024.0, TAU / 1024.0, 682, 0.02, 5.6).unwrap();
+        let (detect, _, track) = g.landmark_params_for(&urg);
+        assert!(
+            (detect.range_limit_margin_m - 0.2886).abs() < 1e-4,
+            "{detect:?}"
+        );
+        assert_eq!(
+            track.detect.range_limit_margin_m,
+            detect.range_limit_margin_m
+        );
+        // The paper's method keeps no margin.
+        let p = Params::paper();
+        assert_eq!(p.landmark_params_for(&urg).0.range_limit_margin_m, 0.0);
     }
 
     #[test]

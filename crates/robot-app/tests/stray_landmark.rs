@@ -37,11 +37,13 @@ fn a_landmark_the_scans_do_not_confirm_does_not_stop_the_robot() {
     let dir = tempfile::tempdir().unwrap();
     // Leg 6 (`-v`: `the laser saw the robot not move`): the landmark says 0.07 m of the
     // commanded 1 m, and the scan match, started there, pins the travel only to 0.025 m.
-    // Trusted, the estimate stays behind by the 0.95 m the robot drove: a false arrival.
+    // Trusted, the estimate stays behind by the 0.95 m the robot drove: a false arrival. The
+    // landmark lies 0.2 m inside the 5.6 m range, so the range-limit margin is held at its
+    // fixed 0.15 m here (`range_limit_gaps = 0`) to leave it to this check.
     let trusted = run(
         dir.path(),
         "trusted",
-        "[localiser]\nstray_landmark_max_sigma_m = 0\n",
+        "[landmarks]\nrange_limit_gaps = 0\n[localiser]\nstray_landmark_max_sigma_m = 0\n",
     );
     assert_eq!(trusted["reason"], "false_arrival", "{trusted}");
     assert!(trusted["final_position_error_m"].as_f64().unwrap() > 0.5);
@@ -50,7 +52,7 @@ fn a_landmark_the_scans_do_not_confirm_does_not_stop_the_robot() {
     let checked = run(
         dir.path(),
         "checked",
-        "[localiser]\nstray_landmark_max_sigma_m = 0.01\n",
+        "[landmarks]\nrange_limit_gaps = 0\n[localiser]\nstray_landmark_max_sigma_m = 0.01\n",
     );
     assert_eq!(checked["reason"], "reached", "{checked}");
     assert!(
