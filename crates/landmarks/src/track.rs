@@ -148,7 +148,8 @@ impl Tracker {
         };
         let clear = |range_m: f64| {
             !self.params.reject_near_range_limit
-                || range_m < geometry.max_range_m - self.params.detect.range_limit_margin_m
+                || range_m
+                    < geometry.max_range_m - self.params.detect.range_limit_margin_for(geometry)
         };
         let best = found
             .iter()

@@ -197,7 +197,7 @@ impl Navigator {
             coord(goal.x_m()) && coord(goal.y_m()),
             format!("{}, {}", goal.x_m(), goal.y_m()),
         )?;
-        let (detect_params, select_params, track_params) = params.landmark_params_for(&geometry);
+        let (detect_params, select_params, track_params) = params.landmark_params();
         let planner = Planner::new(params.planner_params());
         let leg_limit = params.leg_limit(start.position(), goal);
         let slam = if params.localiser.slam {

@@ -7,7 +7,7 @@
 use std::str::FromStr;
 
 use landmarks::{DetectParams, SelectParams, TrackParams};
-use scan_types::{ScanGeometry, WorldPoint};
+use scan_types::WorldPoint;
 use serde::{Deserialize, Serialize};
 
 use crate::NavigatorError;
@@ -803,23 +803,6 @@ impl Params {
         table
     }
 
-    /// [`Params::landmark_params`] for a scanner of `geometry`: the range-limit margin grown
-    /// to `[landmarks] range_limit_gaps` of its range gaps when that is more.
-    pub fn landmark_params_for(
-        &self,
-        geometry: &ScanGeometry,
-    ) -> (DetectParams, SelectParams, TrackParams) {
-        let (mut detect, select, mut track) = self.landmark_params();
-        let l = &self.landmarks;
-        if detect.reject_near_range_limit {
-            let gap_m = geometry.max_range_m.powi(2) * geometry.increment_rad.abs();
-            let margin = l.range_limit_margin_m.max(l.range_limit_gaps * gap_m);
-            detect.range_limit_margin_m = margin;
-            track.detect.range_limit_margin_m = margin;
-        }
-        (detect, select, track)
-    }
-
     /// Landmark detection, selection and tracking parameters: the method's preset with the
     /// configured keys applied.
     pub fn landmark_params(&self) -> (DetectParams, SelectParams, TrackParams) {
@@ -838,6 +821,7 @@ impl Params {
         let l = &self.landmarks;
         detect.neighbour_n = l.neighbour_n;
         detect.range_limit_margin_m = l.range_limit_margin_m;
+        detect.range_limit_gaps = l.range_limit_gaps;
         detect.reject_near_range_limit = l.range_limit_margin_m > 0.0;
         detect.occlusion_edges = l.occlusion_edges;
         detect.corners = l.corners;
@@ -887,6 +871,7 @@ fn invalid(key: &'static str, value: impl ToString, requirement: &str) -> Naviga
 #[cfg(test)]
 mod tests {
     use super::*;
+    use scan_types::ScanGeometry;
     use std::f64::consts::TAU;
 
     #[test]
@@ -982,27 +967,22 @@ mod tests {
     fn the_range_limit_margin_grows_with_the_scanner_range() {
         let g = Params::goalseek();
         let margin = |geometry: &ScanGeometry| {
-            g.landmark_params_for(geometry)
+            g.landmark_params()
                 .2
                 .detect
-                .range_limit_margin_m
+                .range_limit_margin_for(geometry)
         };
         // The paper's 4 m, 240 deg / 684 steps: 1.5 x 16 x 0.00612 = 0.147 m, under 0.15 m.
         assert_eq!(margin(&ScanGeometry::paper()), 0.15);
         // The URG-04LX's 5.6 m, 2 pi / 1024 steps: 1.5 x 31.36 x 0.006136 = 0.2886 m.
         let urg = ScanGeometry::new(-340.0 * TAU / 1024.0, TAU / 1024.0, 682, 0.02, 5.6).unwrap();
-        let (detect, _, track) = g.landmark_params_for(&urg);
-        assert!(
-            (detect.range_limit_margin_m - 0.2886).abs() < 1e-4,
-            "{detect:?}"
-        );
-        assert_eq!(
-            track.detect.range_limit_margin_m,
-            detect.range_limit_margin_m
-        );
+        let (detect, _, track) = g.landmark_params();
+        let m = detect.range_limit_margin_for(&urg);
+        assert!((m - 0.2886).abs() < 1e-4, "{detect:?}");
+        assert_eq!(track.detect.range_limit_margin_for(&urg), m);
         // The paper's method keeps no margin.
         let p = Params::paper();
-        assert_eq!(p.landmark_params_for(&urg).0.range_limit_margin_m, 0.0);
+        assert_eq!(p.landmark_params().0.range_limit_margin_for(&urg), 0.0);
     }
 
     #[test]

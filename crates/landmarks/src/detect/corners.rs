@@ -191,7 +191,7 @@ fn corner_landmark(
         bearing_rad: pt.bearing_rad(),
         kind: LandmarkKind::Corner,
         open_side: None,
-        near_range_limit: range >= geometry.max_range_m - params.range_limit_margin_m,
+        near_range_limit: range >= geometry.max_range_m - params.range_limit_margin_for(geometry),
         surface_continues: false,
         hidden_at_side: false,
         support_rays: support,

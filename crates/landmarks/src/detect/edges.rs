@@ -176,7 +176,7 @@ pub(super) fn edge_landmark(
     for &d in surface_dirs {
         arm_into(seg, pos, d, params, &mut support);
     }
-    let near_range_limit = range >= geometry.max_range_m - params.range_limit_margin_m;
+    let near_range_limit = range >= geometry.max_range_m - params.range_limit_margin_for(geometry);
     // Extrapolate the surface onto the open neighbour ray.
     let surface_continues =
         surface_continues(geometry, seg, pos, open_dirs, &support, far_range_m, params);
@@ -226,7 +226,7 @@ fn surface_continues(
             }
             let b = geometry.bearing_rad(seg[q as usize].index);
             let reach = line_range_on_ray(c, d, b);
-            let limit = far_range_m - params.range_limit_margin_m.max(0.02);
+            let limit = far_range_m - params.range_limit_margin_for(geometry).max(0.02);
             if reach.is_none_or(|t| t >= limit) {
                 surface_continues = true;
             }

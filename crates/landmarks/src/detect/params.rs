@@ -1,5 +1,7 @@
 //! Detection parameters, the paper's and permissive presets, and their validation.
 
+use scan_types::ScanGeometry;
+
 use crate::LandmarksError;
 
 /// Every rule of landmark detection; see `docs/landmarks.md`.
@@ -28,8 +30,13 @@ pub struct DetectParams {
     pub edge_refine: bool,
     /// Place a corner where its two fitted arms intersect instead of at the corner ray's hit.
     pub corner_refine: bool,
-    /// A hit this close to the maximum range is flagged `near_range_limit`, metres.
+    /// A hit this close to the maximum range is flagged `near_range_limit`, metres ...
     pub range_limit_margin_m: f64,
+    /// ... or this many range gaps between neighbouring hits on a wall 1 m to the side at the
+    /// maximum range (r_max^2 times the ray spacing, per metre), when that is more: a
+    /// longer-ranged scanner's last hit on a receding wall lies farther inside its limit (0:
+    /// the margin alone; a margin of 0 keeps the flag off).
+    pub range_limit_gaps: f64,
     /// Drop landmarks flagged `near_range_limit`.
     pub reject_near_range_limit: bool,
     /// Drop edges whose surface continues past them (`surface_continues`).
@@ -73,6 +80,7 @@ impl Default for DetectParams {
             corner_refine: true,
             edge_refine: true,
             range_limit_margin_m: 0.1,
+            range_limit_gaps: 0.0,
             reject_near_range_limit: true,
             reject_surface_continues: true,
             reject_hidden_at_side: false,
@@ -105,6 +113,16 @@ impl DetectParams {
             reject_bridged_dropouts: false,
             ..Self::default()
         }
+    }
+
+    /// The range-limit margin for a scanner of `geometry`: `range_limit_margin_m`, grown to
+    /// `range_limit_gaps` of its range gaps when that is more, metres.
+    pub fn range_limit_margin_for(&self, geometry: &ScanGeometry) -> f64 {
+        if self.range_limit_margin_m <= 0.0 {
+            return self.range_limit_margin_m;
+        }
+        let gap_m = geometry.max_range_m.powi(2) * geometry.increment_rad.abs();
+        self.range_limit_margin_m.max(self.range_limit_gaps * gap_m)
     }
 
     /// Every kind detected and nothing rejected (flags still set): what a tracker
@@ -145,6 +163,13 @@ impl DetectParams {
             return bad(
                 "range_limit_margin_m",
                 self.range_limit_margin_m,
+                "must be finite and >= 0",
+            );
+        }
+        if !(self.range_limit_gaps.is_finite() && self.range_limit_gaps >= 0.0) {
+            return bad(
+                "range_limit_gaps",
+                self.range_limit_gaps,
                 "must be finite and >= 0",
             );
         }
