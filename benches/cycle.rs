@@ -215,6 +215,10 @@ fn bench_cycle(c: &mut Criterion) {
             black_box(t.align(&g, &s.stepped, Pose2::new(0.08, 0.01, 0.01), &mp))
         })
     });
+    let axes = localiser::AxesParams::default();
+    steps.bench_function("wall_axes", |b| {
+        b.iter(|| black_box(localiser::wall_axes(&g, black_box(&s.after), &axes)))
+    });
     steps.bench_function("grid_integrate", |b| {
         b.iter(|| black_box(grid.integrate(&s.pose, &g, &s.stepped)))
     });

@@ -3,22 +3,16 @@
 #![allow(clippy::print_stdout)] // tests report their figures
 
 use std::io::BufRead;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::Command;
 
 use robot_app::cmd::slam::{load_params, run_log, write_outputs};
 use scan_log::tum;
 use slam::SlamRun;
 
-fn shared(rel: &str) -> Option<PathBuf> {
-    let p = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/data/")).join(rel);
-    if p.exists() {
-        Some(p)
-    } else {
-        println!("skipping: {} not found (../shared is absent)", p.display());
-        None
-    }
-}
+#[path = "common/shared_data.rs"]
+mod shared_data;
+use shared_data::shared;
 
 fn slam(path: &Path) -> SlamRun {
     let (front, loops) = load_params(None).unwrap();

@@ -27,6 +27,7 @@ mod grid;
 mod io;
 mod mapping;
 mod pointmap;
+mod rectilinear;
 mod rotation;
 mod scanmatch;
 mod triangle;
@@ -36,6 +37,7 @@ pub use grid::{CellState, GridParams, MapServerFiles, OccupancyGrid, pixel};
 pub use io::write_atomic;
 pub use mapping::{MapStats, build_map};
 pub use pointmap::{MapScan, PointMap};
+pub use rectilinear::{AxesParams, WallAxes, wall_axes, wrap_quarter_rad};
 pub use rotation::{
     HeadingRule, RotationEstimate, RotationParams, heading_after_rotation, measure_rotation,
     measure_rotation_with,

@@ -3,7 +3,7 @@
 
 use expansion::Expander;
 use landmarks::{DetectParams, Landmark, SelectParams, TrackParams, detect, select};
-use localiser::OccupancyGrid;
+use localiser::{AxesParams, OccupancyGrid};
 use planner::{Plan, Planner};
 use scan_types::{Pose2, Scan, ScanGeometry, WorldPoint};
 
@@ -163,10 +163,23 @@ pub struct Navigator {
     revisits: Revisits,
     /// The leg of the last revisit correction (0: none yet).
     last_revisit_leg: usize,
+    /// `[localiser] rectilinear`: the building's axes (`None` until a scan shows walls).
+    axes: Option<Axes>,
     /// Cycles begun beside a target inside a mapped obstacle's clearance.
     blocked_target_seen: usize,
     /// Legs ended early by `[planner] replan_step_m`.
     legs_cut_short: usize,
+}
+
+/// The building's axes as `[localiser] rectilinear` estimates them.
+#[derive(Debug, Clone, Copy)]
+struct Axes {
+    /// Their direction in the world frame, modulo 90 deg, radians.
+    angle_rad: f64,
+    /// Its variance, rad^2.
+    var_rad2: f64,
+    /// Its covariance with the estimate's heading, rad^2.
+    cov_heading_rad2: f64,
 }
 
 impl Navigator {
@@ -243,6 +256,7 @@ impl Navigator {
             sigma_position_m: 0.0,
             revisits: Revisits::default(),
             last_revisit_leg: 0,
+            axes: None,
             blocked_target_seen: 0,
             legs_cut_short: 0,
         })
@@ -336,6 +350,7 @@ impl Navigator {
                 if let Some(pose) = self.slam_place(&scan, self.estimate) {
                     self.estimate = pose;
                 }
+                self.square_up(&scan);
                 self.integrate(&scan);
                 // After a retarget the last leg's end is already recorded.
                 if self.legs_log.is_empty() {
@@ -722,6 +737,7 @@ impl Navigator {
         }
         .to_radians();
         self.sigma_heading_rad = self.sigma_heading_rad.hypot(added);
+        self.square_up(after);
         turn.before = after.clone();
         if turn.left > 0 {
             turn.left -= 1;
@@ -1054,6 +1070,7 @@ impl Navigator {
         };
         self.sigma_position_m =
             self.sigma_position_m.hypot(share * driven) + driven * self.sigma_heading_rad;
+        self.square_up(&drive.last_scan);
         if self.params.localiser.revisit && drive.commanded_m > 0.0 {
             self.revisit(&drive.last_scan);
         }
@@ -1085,6 +1102,76 @@ impl Navigator {
             self.failures = 0;
         }
         self.plan_next(scan)
+    }
+
+    /// `[localiser] rectilinear`: the heading and the building's axes corrected by the scan's
+    /// walls, a Kalman update of the two (the walls' direction in the robot frame is the axes
+    /// less the heading); the first scan with walls sets the axes.
+    fn square_up(&mut self, scan: &Scan) {
+        let l = &self.params.localiser;
+        if !l.rectilinear {
+            return;
+        }
+        let walls = AxesParams {
+            min_share: l.rectilinear_min_share,
+            ..AxesParams::default()
+        };
+        let Some(walls) = localiser::wall_axes(&self.geometry, scan, &walls) else {
+            return;
+        };
+        let r = l.rectilinear_sigma_deg.to_radians().powi(2);
+        let p_hh = self.sigma_heading_rad.powi(2);
+        let seen = localiser::wrap_quarter_rad(walls.angle_rad + self.estimate.theta_rad);
+        let Some(axes) = self.axes else {
+            self.axes = Some(Axes {
+                angle_rad: seen,
+                var_rad2: p_hh + r,
+                cov_heading_rad2: p_hh,
+            });
+            return;
+        };
+        // Walls are no truer than this: they correct only a heading known worse.
+        if p_hh < r {
+            return;
+        }
+        let off = localiser::wrap_quarter_rad(seen - axes.angle_rad);
+        // Other corrections (revisits, SLAM) shrink the heading's variance alone: the
+        // covariance is held to what the two variances allow.
+        let p_aa = axes.var_rad2;
+        let bound = (p_hh * p_aa).sqrt();
+        let p_ha = axes.cov_heading_rad2.clamp(-bound, bound);
+        let innovation_var = p_hh + p_aa - 2.0 * p_ha + r;
+        let gate = (l.rectilinear_gate_sigmas * innovation_var.sqrt())
+            .min(l.rectilinear_max_deg.to_radians());
+        if off.abs() > gate {
+            tracing::debug!(
+                off_deg = off.to_degrees(),
+                gate_deg = gate.to_degrees(),
+                "walls off the building's axes; heading kept"
+            );
+            return;
+        }
+        // Gains of the heading and the axes for the innovation `off`.
+        let k_h = (p_ha - p_hh) / innovation_var;
+        let k_a = (p_aa - p_ha) / innovation_var;
+        tracing::debug!(
+            off_deg = off.to_degrees(),
+            correction_deg = (k_h * off).to_degrees(),
+            walls = walls.points,
+            "heading squared up to the building's axes"
+        );
+        self.estimate.theta_rad =
+            scan_types::normalize_angle_rad(self.estimate.theta_rad + k_h * off);
+        // (I - K H) P with H = [-1, 1].
+        let new_hh = p_hh + k_h * (p_hh - p_ha);
+        let new_ha = p_ha + k_h * (p_ha - p_aa);
+        let new_aa = p_aa - k_a * (p_aa - p_ha);
+        self.sigma_heading_rad = new_hh.max(0.0).sqrt();
+        self.axes = Some(Axes {
+            angle_rad: localiser::wrap_quarter_rad(axes.angle_rad + k_a * off),
+            var_rad2: new_aa.max(0.0),
+            cov_heading_rad2: new_ha,
+        });
     }
 
     /// `[localiser] revisit`: corrects the estimate by the earlier leg ends near it, and keeps

@@ -313,6 +313,43 @@ pub struct LocaliserParams {
     /// direction, metres (one standard deviation, without the prior).
     #[serde(default = "default_revisit_max_sigma_m")]
     pub revisit_max_sigma_m: f64,
+    /// Rectilinear heading: after each turn and at each leg's end the scan's straight walls,
+    /// folded modulo 90 deg, measure the heading against the building's axes (those of the
+    /// first scan with walls), so that a blind turn's error does not steer every later leg.
+    /// Absent from a stored configuration, it is off (as the runs recorded before it).
+    #[serde(default)]
+    pub rectilinear: bool,
+    /// The rectilinear measurement's standard deviation, degrees (walls off true and the
+    /// fit's own error).
+    #[serde(default = "default_rectilinear_sigma_deg")]
+    pub rectilinear_sigma_deg: f64,
+    /// A rectilinear measurement more than this many standard deviations (of the heading's
+    /// uncertainty and the measurement's together) from the estimate is ignored: walls that
+    /// do not run along the axes ...
+    #[serde(default = "default_rectilinear_gate_sigmas")]
+    pub rectilinear_gate_sigmas: f64,
+    /// ... and so is one more than this from it, degrees.
+    #[serde(default = "default_rectilinear_max_deg")]
+    pub rectilinear_max_deg: f64,
+    /// Share of a scan's straight-wall hits that must run along one pair of axes (0..1).
+    #[serde(default = "default_rectilinear_min_share")]
+    pub rectilinear_min_share: f64,
+}
+
+fn default_rectilinear_sigma_deg() -> f64 {
+    0.75
+}
+
+fn default_rectilinear_gate_sigmas() -> f64 {
+    3.0
+}
+
+fn default_rectilinear_max_deg() -> f64 {
+    5.0
+}
+
+fn default_rectilinear_min_share() -> f64 {
+    0.7
 }
 
 fn default_revisit_radius_m() -> f64 {
@@ -617,6 +654,11 @@ impl Params {
                 revisit_min_age_legs: default_revisit_min_age_legs(),
                 revisit_keyframes: default_revisit_keyframes(),
                 revisit_max_sigma_m: default_revisit_max_sigma_m(),
+                rectilinear: true,
+                rectilinear_sigma_deg: default_rectilinear_sigma_deg(),
+                rectilinear_gate_sigmas: default_rectilinear_gate_sigmas(),
+                rectilinear_max_deg: default_rectilinear_max_deg(),
+                rectilinear_min_share: default_rectilinear_min_share(),
                 slam_smoothing_m: default_slam_smoothing_m(),
                 slam_fuse_prediction: true,
                 slam_line_scatter: 0.03,
@@ -670,6 +712,7 @@ impl Params {
         c.localiser.heading_rule = HeadingRule::Commanded;
         c.localiser.travel_rule = TravelRule::Landmark;
         c.localiser.revisit = false;
+        c.localiser.rectilinear = false;
         c.localiser.stray_landmark_max_sigma_m = 0.0;
         c.navigator.skip_turn_below_deg = 0.0;
         // Its greedy rule loops where a wall blocks it: more legs only lengthen the loop.
@@ -777,6 +820,10 @@ impl Params {
             ("localiser.revisit_min_age_legs", count(z.revisit_min_age_legs), 1.0, 1e6, false),
             ("localiser.revisit_keyframes", count(z.revisit_keyframes), 1.0, 100.0, false),
             ("localiser.revisit_max_sigma_m", z.revisit_max_sigma_m, 0.0, 10.0, true),
+            ("localiser.rectilinear_sigma_deg", z.rectilinear_sigma_deg, 0.0, 90.0, true),
+            ("localiser.rectilinear_gate_sigmas", z.rectilinear_gate_sigmas, 0.0, 100.0, true),
+            ("localiser.rectilinear_max_deg", z.rectilinear_max_deg, 0.0, 45.0, true),
+            ("localiser.rectilinear_min_share", z.rectilinear_min_share, 0.0, 1.0, false),
             ("localiser.turn_sigma_deg", z.turn_sigma_deg, 0.0, 90.0, false),
             ("localiser.measured_turn_sigma_deg", z.measured_turn_sigma_deg, 0.0, 90.0, false),
             ("localiser.drive_sigma_share", z.drive_sigma_share, 0.0, 1.0, false),

@@ -26,11 +26,7 @@ fn run(dir: &Path, name: &str, config: &str) -> Value {
 #[test]
 #[allow(clippy::print_stdout)]
 fn a_longer_range_keeps_a_wider_margin_at_its_limit() {
-    if !sim_run::root()
-        .join("../shared/worlds/stage/sri-aic-kwing.yaml")
-        .exists()
-    {
-        println!("skipping: ../shared/worlds/stage/sri-aic-kwing.yaml not found");
+    if !sim_run::stage_image_present("sri-aic-kwing.yaml") {
         return;
     }
     let dir = tempfile::tempdir().unwrap();

@@ -26,12 +26,7 @@ fn run(dir: &Path, name: &str, config: &str) -> Value {
 #[test]
 #[allow(clippy::print_stdout)]
 fn a_landmark_the_scans_do_not_confirm_does_not_stop_the_robot() {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
-    if !root
-        .join("../shared/worlds/stage/simple_rooms.png")
-        .exists()
-    {
-        println!("skipping: ../shared/worlds/stage/simple_rooms.png not found");
+    if !sim_run::stage_image_present("simple_rooms.png") {
         return;
     }
     let dir = tempfile::tempdir().unwrap();

@@ -20,13 +20,8 @@ fn run(dir: &Path, name: &str, config: &str) -> Value {
 }
 
 #[test]
-#[allow(clippy::print_stdout)]
 fn a_ray_shift_far_from_the_command_needs_the_match() {
-    if !sim_run::root()
-        .join("../shared/worlds/stage/sal2.png")
-        .exists()
-    {
-        println!("skipping: ../shared/worlds/stage/sal2.png not found");
+    if !sim_run::stage_image_present("sal2.png") {
         return;
     }
     let dir = tempfile::tempdir().unwrap();

@@ -12,6 +12,16 @@ pub fn root() -> std::path::PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
 }
 
+/// Whether `../shared/worlds/stage/FILE` is there (a note when it is not: the test skips).
+#[allow(clippy::print_stdout)] // the note says why the test did nothing
+pub fn stage_image_present(file: &str) -> bool {
+    let present = root().join("../shared/worlds/stage").join(file).exists();
+    if !present {
+        println!("skipping: ../shared/worlds/stage/{file} not found");
+    }
+    present
+}
+
 /// `summary.json` of `robot-app sim --world sim/floorplans/WORLD.toml ARGS --config` with
 /// `config` written to `dir/NAME.toml`, its outputs in `dir/NAME`.
 pub fn summary(dir: &Path, name: &str, world: &str, args: &[&str], config: &str) -> Value {
