@@ -69,7 +69,7 @@ fn check(rel: &str, min_within_2_deg: f64) {
 
 #[test]
 fn intel_walls_agree_on_the_buildings_axes() {
-    // Some of the Intel lab's walls run off the axes: 5 % of its scans lie more than 4 deg off.
+    // Some of the Intel lab's walls run off the axes: about 5 % of its scans lie more than 4 deg off.
     check("carmen/intel-corrected.log.gz", 0.85);
 }
 

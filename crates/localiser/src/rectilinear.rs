@@ -18,11 +18,11 @@ pub struct AxesParams {
     /// The surface is straight when its variance across is at most this share of its
     /// variance along.
     pub line_scatter: f64,
-    /// Wall hits within this of the scan's axes (modulo 90 deg) agree with them, degrees.
+    /// Wall fits within this of the scan's axes (modulo 90 deg) agree with them, degrees.
     pub inlier_deg: f64,
     /// Fewest agreeing wall fits for an answer (one per second hit) ...
     pub min_points: usize,
-    /// ... and their least share of all the wall hits (0..1).
+    /// ... and their least share of all the wall fits (0..1).
     pub min_share: f64,
 }
 
@@ -44,9 +44,9 @@ impl Default for AxesParams {
 pub struct WallAxes {
     /// The axes' direction in the robot frame, modulo 90 deg: in (-45, 45] deg, radians.
     pub angle_rad: f64,
-    /// Wall hits that agree with it.
+    /// Wall fits (one per second hit) that agree with it.
     pub points: usize,
-    /// Their share of all the wall hits (1: every wall of the scan runs along the axes).
+    /// Their share of all the wall fits (1: every wall of the scan runs along the axes).
     pub share: f64,
 }
 
@@ -58,7 +58,7 @@ pub fn wrap_quarter_rad(angle_rad: f64) -> f64 {
 }
 
 /// The direction, modulo 90 deg, of the straight walls of `scan` in the robot frame; `None`
-/// when too few wall hits agree on one.
+/// when too few wall fits agree on one.
 pub fn wall_axes(geometry: &ScanGeometry, scan: &Scan, params: &AxesParams) -> Option<WallAxes> {
     let hits: Vec<[f64; 2]> = scan
         .robot_hits(geometry)
@@ -100,7 +100,7 @@ pub fn wall_axes(geometry: &ScanGeometry, scan: &Scan, params: &AxesParams) -> O
             dirs.push(d);
         }
     }
-    if dirs.len() < params.min_points {
+    if dirs.is_empty() || dirs.len() < params.min_points {
         return None;
     }
     // The densest window of directions modulo 90 deg, 2 x `inlier_deg` wide; the answer is

@@ -65,7 +65,13 @@ fn a_scan_without_straight_walls_has_no_axes() {
         .collect();
     let scan = scan_at(&g, &ring, 0.0, 0.0, 0.0);
     assert_eq!(wall_axes(&g, &scan, &AxesParams::default()), None);
-    // Nothing in range at all.
+    // Nothing in range at all, even when no fit at all would do.
     let empty = scan_at(&g, &[], 0.0, 0.0, 0.0);
     assert_eq!(wall_axes(&g, &empty, &AxesParams::default()), None);
+    let any = AxesParams {
+        min_points: 0,
+        min_share: 0.0,
+        ..AxesParams::default()
+    };
+    assert_eq!(wall_axes(&g, &empty, &any), None);
 }

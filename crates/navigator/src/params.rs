@@ -331,7 +331,7 @@ pub struct LocaliserParams {
     /// ... and so is one more than this from it, degrees.
     #[serde(default = "default_rectilinear_max_deg")]
     pub rectilinear_max_deg: f64,
-    /// Share of a scan's straight-wall hits that must run along one pair of axes (0..1).
+    /// Share of a scan's straight-wall fits that must run along one pair of axes (0..1).
     #[serde(default = "default_rectilinear_min_share")]
     pub rectilinear_min_share: f64,
 }
