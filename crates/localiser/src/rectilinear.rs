@@ -52,9 +52,8 @@ pub struct WallAxes {
 
 /// `angle` wrapped into (-45, 45] deg: the difference between two directions modulo 90 deg.
 pub fn wrap_quarter_rad(angle_rad: f64) -> f64 {
-    let q = FRAC_PI_2;
-    let w = angle_rad - q * (angle_rad / q).round();
-    if w <= -FRAC_PI_4 { w + q } else { w }
+    let w = angle_rad - FRAC_PI_2 * (angle_rad / FRAC_PI_2).round();
+    if w <= -FRAC_PI_4 { w + FRAC_PI_2 } else { w }
 }
 
 /// The direction, modulo 90 deg, of the straight walls of `scan` in the robot frame; `None`
@@ -109,8 +108,7 @@ pub fn wall_axes(geometry: &ScanGeometry, scan: &Scan, params: &AxesParams) -> O
     let mut folded: Vec<f64> = dirs.iter().map(|&d| wrap_quarter_rad(d)).collect();
     folded.sort_by(f64::total_cmp);
     let n = folded.len();
-    let quarter = FRAC_PI_2;
-    let at = |k: usize| folded[k % n] + if k >= n { quarter } else { 0.0 };
+    let at = |k: usize| folded[k % n] + if k >= n { FRAC_PI_2 } else { 0.0 };
     let (mut best, mut best_start, mut end) = (0, 0, 0);
     for start in 0..n {
         end = end.max(start);

@@ -1112,6 +1112,13 @@ impl Navigator {
         if !l.rectilinear {
             return;
         }
+        let r = l.rectilinear_sigma_deg.to_radians().powi(2);
+        let p_hh = self.sigma_heading_rad.powi(2);
+        // Walls are no truer than this: once the axes are set, they correct only a heading
+        // known worse (and the scan is not fitted otherwise).
+        if self.axes.is_some() && p_hh < r {
+            return;
+        }
         let walls = AxesParams {
             min_share: l.rectilinear_min_share,
             ..AxesParams::default()
@@ -1119,8 +1126,6 @@ impl Navigator {
         let Some(walls) = localiser::wall_axes(&self.geometry, scan, &walls) else {
             return;
         };
-        let r = l.rectilinear_sigma_deg.to_radians().powi(2);
-        let p_hh = self.sigma_heading_rad.powi(2);
         let seen = localiser::wrap_quarter_rad(walls.angle_rad + self.estimate.theta_rad);
         let Some(axes) = self.axes else {
             self.axes = Some(Axes {
@@ -1130,10 +1135,6 @@ impl Navigator {
             });
             return;
         };
-        // Walls are no truer than this: they correct only a heading known worse.
-        if p_hh < r {
-            return;
-        }
         let off = localiser::wrap_quarter_rad(seen - axes.angle_rad);
         // Other corrections (revisits, SLAM) shrink the heading's variance alone: the
         // covariance is held to what the two variances allow.
