@@ -701,9 +701,18 @@ impl Navigator {
             }
             m
         };
-        let (turned, mut by_laser) = match self.params.localiser.heading_rule {
-            HeadingRule::Commanded => (chunk, false),
-            HeadingRule::ScanMeasured => measured().map_or((chunk, false), |m| (m, true)),
+        let l = &self.params.localiser;
+        let (matched_sigma, shift_sigma, command_sigma) = (
+            l.measured_turn_sigma_deg,
+            l.ray_shift_alone_sigma_deg,
+            l.turn_sigma_deg,
+        );
+        // The turn, and the heading uncertainty (degrees) it adds.
+        let (turned, mut added_deg) = match l.heading_rule {
+            HeadingRule::Commanded => (chunk, command_sigma),
+            HeadingRule::ScanMeasured => {
+                measured().map_or((chunk, command_sigma), |m| (m, matched_sigma))
+            }
             HeadingRule::ScanMatched => {
                 let m = measured();
                 let guess = m.unwrap_or(chunk);
@@ -715,28 +724,21 @@ impl Navigator {
                     "turn measured"
                 );
                 match (r, m) {
-                    (Some(r), _) => (r, true),
-                    (None, Some(m)) if self.ray_shift_alone_fits(m, chunk) => (m, true),
-                    (None, _) => (chunk, false),
+                    (Some(r), _) => (r, matched_sigma),
+                    (None, Some(m)) if self.ray_shift_alone_fits(m, chunk) => (m, shift_sigma),
+                    (None, _) => (chunk, command_sigma),
                 }
             }
         };
         let rotated = self.estimate.rotated(turned);
         self.estimate = match self.slam_place(after, rotated) {
             Some(pose) => {
-                by_laser = true;
+                added_deg = matched_sigma;
                 pose
             }
             None => rotated,
         };
-        let l = &self.params.localiser;
-        let added = if by_laser {
-            l.measured_turn_sigma_deg
-        } else {
-            l.turn_sigma_deg
-        }
-        .to_radians();
-        self.sigma_heading_rad = self.sigma_heading_rad.hypot(added);
+        self.sigma_heading_rad = self.sigma_heading_rad.hypot(added_deg.to_radians());
         self.square_up(after);
         turn.before = after.clone();
         if turn.left > 0 {

@@ -218,6 +218,10 @@ pub struct LocaliserParams {
     /// command stands (0: always counts, as a configuration without the key).
     #[serde(default)]
     pub ray_shift_max_sigmas: f64,
+    /// Heading uncertainty a turn chunk measured by the ray shift alone adds, degrees (a
+    /// configuration without the key: 0.2, a match's).
+    #[serde(default = "default_measured_turn_sigma_deg")]
+    pub ray_shift_alone_sigma_deg: f64,
     /// Online SLAM: every turn chunk's scan, every `slam_step_m` of a drive and every leg's
     /// last scan are placed against a submap of recent keyframes by the slam crate's
     /// correlative scan-to-submap matching, searched around the pose the rules above give;
@@ -250,7 +254,7 @@ pub struct LocaliserParams {
     /// degrees (one standard deviation).
     #[serde(default = "default_turn_sigma_deg")]
     pub turn_sigma_deg: f64,
-    /// ... and when a scan measured it, degrees.
+    /// ... and when a scan match or SLAM measured it, degrees.
     #[serde(default = "default_measured_turn_sigma_deg")]
     pub measured_turn_sigma_deg: f64,
     /// Position uncertainty a drive adds per metre when no scan measured it (a share of the
@@ -638,6 +642,7 @@ impl Params {
                 drive_turn_sigma_deg: default_drive_turn_sigma_deg(),
                 partial_travel_max_sigma_m: default_partial_travel_max_sigma_m(),
                 ray_shift_max_sigmas: 3.0,
+                ray_shift_alone_sigma_deg: default_turn_sigma_deg(),
                 slam: false,
                 slam_window_m: default_slam_window_m(),
                 slam_window_deg: default_slam_window_deg(),
@@ -804,6 +809,7 @@ impl Params {
             ("localiser.drive_turn_sigma_deg", z.drive_turn_sigma_deg, 0.001, 90.0, false),
             ("localiser.partial_travel_max_sigma_m", z.partial_travel_max_sigma_m, 0.0, 1.0, false),
             ("localiser.ray_shift_max_sigmas", z.ray_shift_max_sigmas, 0.0, 100.0, false),
+            ("localiser.ray_shift_alone_sigma_deg", z.ray_shift_alone_sigma_deg, 0.0, 90.0, false),
             ("localiser.slam_window_m", z.slam_window_m, 0.0, 1.6, true),
             ("localiser.slam_window_deg", z.slam_window_deg, 0.0, 90.0, true),
             ("localiser.slam_step_m", z.slam_step_m, 0.0, 10.0, true),
@@ -958,6 +964,10 @@ mod tests {
             .as_object_mut()
             .unwrap()
             .remove("ray_shift_max_sigmas");
+        stored["localiser"]
+            .as_object_mut()
+            .unwrap()
+            .remove("ray_shift_alone_sigma_deg");
         let n = stored["navigator"].as_object_mut().unwrap();
         n.remove("skip_turn_below_deg");
         n.remove("skip_turn_max_hits");
@@ -984,6 +994,8 @@ mod tests {
         assert_eq!(old.localiser.partial_travel_max_sigma_m, 0.05);
         // Every ray shift counts.
         assert_eq!(old.localiser.ray_shift_max_sigmas, 0.0);
+        // A ray shift alone as certain as a scan match.
+        assert_eq!(old.localiser.ray_shift_alone_sigma_deg, 0.2);
         assert_eq!(old.navigator.skip_turn_below_deg, 0.0);
         assert_eq!(old.navigator.skip_turn_max_hits, 60);
         // The grid path alone ranks the rays.
@@ -1000,6 +1012,7 @@ mod tests {
         back.localiser.drive_turn_sigma_deg = g.localiser.drive_turn_sigma_deg;
         back.localiser.partial_travel_max_sigma_m = 0.02;
         back.localiser.ray_shift_max_sigmas = 3.0;
+        back.localiser.ray_shift_alone_sigma_deg = 1.0;
         back.navigator.skip_turn_below_deg = g.navigator.skip_turn_below_deg;
         back.planner.line_of_sight = true;
         back.planner.measure_path_gaps = true;

@@ -31,7 +31,7 @@ fn run_seeded(k: u64, seed: u64, change: impl FnOnce(&mut Params)) -> robot_app:
 
 /// The drive and turn rules before the drive's heading prior and the skipped small turns, the
 /// rays ranked by their grid path alone, partial travel taken at 0.05 m, travel measured on a
-/// post's edge and every ray shift taken.
+/// post's edge and every ray shift taken as if matched.
 fn old_rules(p: &mut Params) {
     p.tracking.round_centre = false;
     p.localiser.drive_turn_sigma_deg = 2.0;
@@ -39,6 +39,7 @@ fn old_rules(p: &mut Params) {
     p.navigator.skip_turn_below_deg = 0.0;
     p.planner.line_of_sight = false;
     p.localiser.ray_shift_max_sigmas = 0.0;
+    p.localiser.ray_shift_alone_sigma_deg = 0.2;
 }
 
 /// The median absolute final heading error over clutter worlds 0..20 (noise seed 0), degrees.

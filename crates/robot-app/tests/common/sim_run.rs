@@ -13,11 +13,16 @@ pub fn root() -> std::path::PathBuf {
 }
 
 /// Whether `../shared/worlds/stage/FILE` is there (a note when it is not: the test skips).
-#[allow(clippy::print_stdout)] // the note says why the test did nothing
 pub fn stage_image_present(file: &str) -> bool {
-    let present = root().join("../shared/worlds/stage").join(file).exists();
+    world_present(&format!("stage/{file}"))
+}
+
+/// Whether `../shared/worlds/PATH` is there (a note when it is not: the test skips).
+#[allow(clippy::print_stdout)] // the note says why the test did nothing
+pub fn world_present(path: &str) -> bool {
+    let present = root().join("../shared/worlds").join(path).exists();
     if !present {
-        println!("skipping: ../shared/worlds/stage/{file} not found");
+        println!("skipping: ../shared/worlds/{path} not found");
     }
     present
 }
