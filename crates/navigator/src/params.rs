@@ -254,7 +254,8 @@ pub struct LocaliserParams {
     /// degrees (one standard deviation).
     #[serde(default = "default_turn_sigma_deg")]
     pub turn_sigma_deg: f64,
-    /// ... and when a scan match or SLAM measured it, degrees.
+    /// ... and when a scan match or SLAM measured it (or the ray shift, under heading rule
+    /// `scan_measured`), degrees.
     #[serde(default = "default_measured_turn_sigma_deg")]
     pub measured_turn_sigma_deg: f64,
     /// Position uncertainty a drive adds per metre when no scan measured it (a share of the
