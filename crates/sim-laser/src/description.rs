@@ -7,7 +7,7 @@ use toml::Spanned;
 
 use crate::stage::bitmap_from_image;
 use crate::world::{Bitmap, Obstacle, WorldParts};
-use crate::{SimError, UnknownCells, World};
+use crate::{MAX_COORD_M, SimError, UnknownCells, World};
 
 /// A vector world with its scenario: what the generator produces and the TOML format stores.
 #[derive(Debug, Clone, PartialEq, Default)]
@@ -515,11 +515,13 @@ fn toml_bitmap(src: &TomlSource, file: &TomlWorld) -> Result<Option<Bitmap>, Sim
     };
     let line = src.line(b.span());
     let v = b.get_ref();
-    if !(finite(&v.size) && v.size[0] > 0.0 && v.size[1] > 0.0 && finite(&v.centre)) {
+    // Within the limit, hence finite too.
+    let near = |x: &[f64]| x.iter().all(|c| c.abs() <= MAX_COORD_M);
+    if !(near(&v.size) && near(&v.centre) && v.size[0] > 0.0 && v.size[1] > 0.0) {
         return Err(src.err(
             line,
             "bitmap.size",
-            "size must be > 0 and centre finite".into(),
+            format!("size must be > 0 and centre finite, both within {MAX_COORD_M:e} m"),
         ));
     }
     if !(1..=256).contains(&v.dark_below) {

@@ -48,4 +48,4 @@ pub use sim::{
     BaseGains, Collision, MotionNoise, SimBase, SimLaser, SimSpeeds, Simulation, TruthHandle,
 };
 pub use stage::stage_world_from_bytes;
-pub use world::{Bitmap, Obstacle, World, WorldParts};
+pub use world::{Bitmap, MAX_COORD_M, Obstacle, World, WorldParts};

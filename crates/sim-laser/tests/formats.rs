@@ -283,6 +283,51 @@ fn bitmap_dark_below_by_hand() {
 }
 
 #[test]
+fn worlds_far_from_the_origin_are_refused_by_name() {
+    // Past 1e6 m a 1 cm cell is below what the coordinates resolve: an error, never a panic.
+    let dir = tempfile::tempdir().unwrap();
+    let mut pgm = b"P5\n2 1\n255\n".to_vec();
+    pgm.extend_from_slice(&[0, 255]);
+    std::fs::write(dir.path().join("g.pgm"), &pgm).unwrap();
+    let toml = dir.path().join("g.toml");
+    for centre in ["[0.0, 1e308]", "[2e6, 0.0]"] {
+        std::fs::write(
+            &toml,
+            format!("[bitmap]\nimage = \"g.pgm\"\nsize = [2.0, 1.0]\ncentre = {centre}\n"),
+        )
+        .unwrap();
+        let e = World::load(&toml).unwrap_err().to_string();
+        assert!(
+            e.contains("g.toml:1: bitmap.size") && e.contains("within"),
+            "{e}"
+        );
+    }
+    let yaml = dir.path().join("m.yaml");
+    std::fs::write(
+        &yaml,
+        "image: g.pgm\nresolution: 0.05\norigin: [1e300, 0.0, 0.0]\nnegate: 0\noccupied_thresh: 0.65\nfree_thresh: 0.196\n",
+    )
+    .unwrap();
+    let e = World::load(&yaml).unwrap_err().to_string();
+    assert!(e.contains("within"), "{e}");
+    let e = World::from_toml_str(
+        "[[circle]]\ncentre = [1e12, 0.0]\nradius = 1.0\n",
+        Path::new("far.toml"),
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("within"), "{e}");
+    // Just inside the limit a world loads and casts.
+    let w = World::from_toml_str(
+        "[[circle]]\ncentre = [999000.0, 0.0]\nradius = 1.0\n",
+        Path::new("far.toml"),
+    )
+    .unwrap();
+    let hit = w.raycast(p(998990.0, 0.0), 0.0, 20.0).unwrap();
+    assert!((hit - 9.0).abs() < 1e-6, "{hit}");
+}
+
+#[test]
 fn bitmap_free_region_by_hand() {
     // A 9 x 7 image, one metre per pixel from (0, 0): a black ring (columns 2-6, rows 2-4)
     // around the 3 x 1 white strip of row 3, columns 3-5 (a closed block), white around it

@@ -5,6 +5,10 @@ use super::obstacle::aabb_of;
 use super::{Bitmap, EMPTY, NO_POLY, Obstacle, Prim, SOLID, World, WorldParts};
 use crate::SimError;
 
+/// Farthest a world's geometry may lie from the origin, metres: ample for any building, and
+/// far within the range where coordinates keep the precision of a grid cell.
+pub const MAX_COORD_M: f64 = 1e6;
+
 impl World {
     /// Builds a world from a bitmap and/or vector obstacles.
     pub fn from_parts(parts: WorldParts) -> Result<World, SimError> {
@@ -262,6 +266,13 @@ fn extent(parts: &WorldParts) -> Result<([f64; 2], [f64; 2]), SimError> {
         // An empty world: one empty cell at the origin.
         lo = [-0.5, -0.5];
         hi = [0.5, 0.5];
+    }
+    if lo.iter().chain(&hi).any(|v| v.abs() > MAX_COORD_M) {
+        return Err(SimError::InvalidWorld(format!(
+            "the world spans x {} .. {} m, y {} .. {} m; it must lie within {MAX_COORD_M:e} m \
+             of the origin",
+            lo[0], hi[0], lo[1], hi[1]
+        )));
     }
     Ok((lo, hi))
 }

@@ -11,6 +11,7 @@ mod raycast;
 
 use scan_types::WorldPoint;
 
+pub use build::MAX_COORD_M;
 pub(crate) use obstacle::flood_edges;
 pub use obstacle::{Bitmap, Obstacle};
 
