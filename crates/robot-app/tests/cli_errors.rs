@@ -255,6 +255,72 @@ fn batch_checks_its_output_folder_before_the_first_run() {
 }
 
 #[test]
+fn batches_too_large_to_plan_are_refused_before_they_take_the_memory() {
+    // 2e11 runs planned in memory took all 24 GiB of this machine before the check.
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("b");
+    let out = out.to_str().unwrap();
+    fails_naming(
+        &["batch", "--seeds", "0..99999999999", "--out", out],
+        &["--seeds 0..99999999999", "100000 runs"],
+    );
+    // Past u64: the count saturates instead of wrapping to a small number.
+    fails_naming(
+        &[
+            "batch",
+            "--random-pairs",
+            "18446744073709551615",
+            "--scenarios",
+            "pairs",
+            "--out",
+            out,
+        ],
+        &["100000 runs"],
+    );
+    fails_naming(
+        &["batch", "--random-worlds", "5000", "--out", out],
+        &["--random-worlds 5000", "1000"],
+    );
+    fails_naming(
+        &["explore", "--seeds", "0..99999999999", "--out", out],
+        &["--seeds 0..99999999999", "100000"],
+    );
+    // Just at the limit the plan stands: 2 methods x 50 000 seeds of the paper scenario would
+    // run, so only the output folder's check stops it here; one seed more is refused.
+    fails_naming(
+        &[
+            "batch",
+            "--seeds",
+            "0..50001",
+            "--scenarios",
+            "paper",
+            "--method",
+            "goalseek,paper",
+            "--out",
+            out,
+        ],
+        &["1 world and 2 methods", "100000 runs"],
+    );
+    let blocker = dir.path().join("file");
+    std::fs::write(&blocker, b"x").unwrap();
+    let blocked = blocker.join("b");
+    fails_naming(
+        &[
+            "batch",
+            "--seeds",
+            "0..50000",
+            "--scenarios",
+            "paper",
+            "--method",
+            "goalseek,paper",
+            "--out",
+            blocked.to_str().unwrap(),
+        ],
+        &["--out"],
+    );
+}
+
+#[test]
 fn errors_say_their_cause_once() {
     let dir = tempfile::tempdir().unwrap();
     let e = fails_naming(

@@ -43,6 +43,10 @@ struct Aggregates {
 /// Runs the exploration of `args` once per seed of `seeds`.
 pub fn run(args: ExploreArgs, seeds: &str) -> anyhow::Result<()> {
     let range = super::batch::parse_seeds(seeds)?;
+    let max = super::batch::MAX_RUNS;
+    if range.end - range.start > max {
+        anyhow::bail!("--seeds {seeds}: at most {max} explorations at once; split the range");
+    }
     let out = args.options.out.clone();
     std::fs::create_dir_all(&out).with_context(|| format!("cannot create {}", out.display()))?;
     let mut runs = Vec::new();

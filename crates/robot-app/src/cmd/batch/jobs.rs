@@ -8,7 +8,7 @@ use anyhow::Context;
 use scan_types::{Pose2, WorldPoint};
 use sim_laser::{PairSampler, SensorPreset, SimSetup, WorldKind, generated_world};
 
-use super::{BatchArgs, parse_seeds};
+use super::{BatchArgs, MAX_GENERATED_WORLDS, MAX_RUNS, parse_seeds};
 use crate::cmd::sim::SimSpec;
 use crate::config::{Method, Params};
 
@@ -69,6 +69,7 @@ pub fn build(args: &BatchArgs) -> anyhow::Result<Vec<Job>> {
             args.min_distance
         );
     }
+    check_size(args, &seeds, configs.len())?;
     let plan = Plan {
         own_scenario: args.scenarios != "pairs",
         pairs: args.scenarios != "paper",
@@ -86,6 +87,56 @@ pub fn build(args: &BatchArgs) -> anyhow::Result<Vec<Job>> {
         world_jobs(&w, &plan, &mut jobs);
     }
     Ok(jobs)
+}
+
+/// Refuses a batch too large to plan: its generated worlds and jobs are held in memory
+/// before the first run.
+fn check_size(
+    args: &BatchArgs,
+    seeds: &std::ops::Range<u64>,
+    methods: usize,
+) -> anyhow::Result<()> {
+    for (flag, k) in [
+        ("--random-worlds", args.random_worlds),
+        ("--corridor-worlds", args.corridor_worlds),
+        ("--clutter-worlds", args.clutter_worlds),
+    ] {
+        if k > MAX_GENERATED_WORLDS {
+            anyhow::bail!(
+                "{flag} {k}: at most {MAX_GENERATED_WORLDS} generated worlds of a kind (each is \
+                 held in memory); split the batch"
+            );
+        }
+    }
+    let named = if args.worlds.is_empty() {
+        1
+    } else {
+        args.worlds.len()
+    };
+    let worlds = (named + args.random_worlds + args.corridor_worlds + args.clutter_worlds) as u64;
+    let per_seed = u64::from(args.scenarios != "pairs") * (seeds.end - seeds.start);
+    let pairs = if args.scenarios == "paper" {
+        0
+    } else {
+        args.random_pairs
+            .map_or(seeds.end - seeds.start, |n| n as u64)
+    };
+    let runs = per_seed
+        .checked_add(pairs)
+        .and_then(|r| r.checked_mul(worlds))
+        .and_then(|r| r.checked_mul(methods as u64))
+        .unwrap_or(u64::MAX);
+    if runs > MAX_RUNS {
+        let n = |k: u64, what: &str| format!("{k} {what}{}", if k == 1 { "" } else { "s" });
+        anyhow::bail!(
+            "--seeds {}: with {} and {} that is more than {MAX_RUNS} runs, the most one \
+             batch holds; split it",
+            args.seeds,
+            n(worlds, "world"),
+            n(methods as u64, "method")
+        );
+    }
+    Ok(())
 }
 
 /// The worlds named by `--worlds` (default: the paper's), then the generated ones.
