@@ -114,6 +114,71 @@ fn scan_record_interrupted_finishes_the_recording() {
     }
 }
 
+#[test]
+fn replay_and_slam_stop_on_ctrl_c_and_keep_what_they_read() {
+    let dir = tempfile::tempdir().unwrap();
+    let exp1 =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/breezyslam/exp1.dat");
+    assert!(exp1.exists(), "{} missing", exp1.display());
+    // replay paces the 75 s log in real time: Ctrl-C ends it within its 50 ms naps, and the
+    // recording of the scans played so far is finished.
+    let rec = dir.path().join("played.mcap");
+    let mut child = Command::new(BIN)
+        .args(["-q", "replay"])
+        .arg(&exp1)
+        .arg("--record")
+        .arg(&rec)
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn_locked();
+    std::thread::sleep(Duration::from_secs(1));
+    sigint(&child);
+    let stopped = Instant::now();
+    let status = wait_at_most(&mut child, Duration::from_secs(20));
+    assert_eq!(status.code(), Some(130));
+    assert!(
+        stopped.elapsed() < Duration::from_secs(5),
+        "{:?}",
+        stopped.elapsed()
+    );
+    assert!(!partial_path(&rec).exists(), "a .partial file is left");
+    let played = read_mcap(&rec).unwrap().len();
+    assert!(
+        (1..756).contains(&played),
+        "{played} of exp1's 756 scans recorded"
+    );
+    // slam over 20 copies of exp1 (15 120 scans, several seconds): Ctrl-C ends the reading,
+    // and the outputs hold the scans read, without loop closure.
+    let text = std::fs::read(&exp1).unwrap();
+    let long = dir.path().join("long.dat");
+    std::fs::write(&long, text.repeat(20)).unwrap();
+    let out = dir.path().join("slam");
+    let mut child = Command::new(BIN)
+        .args(["-q", "slam", "--log"])
+        .arg(&long)
+        .arg("--out")
+        .arg(&out)
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn_locked();
+    std::thread::sleep(Duration::from_millis(1500));
+    sigint(&child);
+    let status = wait_at_most(&mut child, Duration::from_secs(30));
+    assert_eq!(status.code(), Some(130));
+    let report: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("slam.json")).unwrap()).unwrap();
+    let scans = report["scans"].as_u64().unwrap();
+    assert!((1..15_120).contains(&scans), "{scans} scans read");
+    assert!(
+        report["loop_closure"].is_null(),
+        "{}",
+        report["loop_closure"]
+    );
+    let lines = std::fs::read_to_string(out.join("trajectory.tum")).unwrap();
+    let poses = lines.lines().filter(|l| !l.starts_with('#')).count() as u64;
+    assert_eq!(poses, report["placed"].as_u64().unwrap());
+}
+
 // In this process, not as a child: a child would inherit the emulator's end of the
 // pseudo-terminal (opened without close-on-exec), and the terminal would never close.
 #[test]

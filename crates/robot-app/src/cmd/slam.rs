@@ -134,7 +134,7 @@ pub fn run_log_topic(
     params: &FrontEndParams,
     loops: Option<&LoopParams>,
 ) -> anyhow::Result<SlamRun> {
-    run_log_live(path, topic, params, loops, None, false)
+    Ok(run_log_live(path, topic, params, loops, None, false, false)?.0)
 }
 
 /// [`run_log`] with the search centred on the log's own pose change (`--motion-prior`).
@@ -143,19 +143,22 @@ pub fn run_log_with_motion(
     params: &FrontEndParams,
     loops: Option<&LoopParams>,
 ) -> anyhow::Result<SlamRun> {
-    run_log_live(path, None, params, loops, None, true)
+    Ok(run_log_live(path, None, params, loops, None, true, false)?.0)
 }
 
 /// [`run_log_topic`] showing every scan on `live`, with the front end's pose of it when the
 /// scan was placed; with `motion_prior`, each search is centred on the log's own pose change.
-pub fn run_log_live(
+/// With `interruptible`, a stop request (Ctrl-C) ends the reading and skips loop closure: the
+/// run holds the front end's poses of the scans read, and the flag returned is true.
+fn run_log_live(
     path: &Path,
     topic: Option<&str>,
     params: &FrontEndParams,
     loops: Option<&LoopParams>,
     mut live: Option<&mut crate::live::LiveView>,
     motion_prior: bool,
-) -> anyhow::Result<SlamRun> {
+    interruptible: bool,
+) -> anyhow::Result<(SlamRun, bool)> {
     let options = LogOptions {
         topic: topic.map(str::to_string),
         ..LogOptions::default()
@@ -168,7 +171,12 @@ pub fn run_log_live(
     // The motion source is chosen once, on the first record with a pose: odometry when the
     // log has it, else its pose; a record without that one centres nothing.
     let mut odometry: Option<bool> = None;
+    let mut interrupted = false;
     loop {
+        if interruptible && crate::interrupt::requested() {
+            interrupted = true;
+            break;
+        }
         let rec = match source.next_record() {
             Ok(r) => r,
             Err(e) if e.is_end_of_log() => break,
@@ -202,14 +210,21 @@ pub fn run_log_live(
             "{name}: --motion-prior: the log holds no poses; the constant-velocity model centres every search"
         );
     }
-    let run = match loops {
+    let run = match loops.filter(|_| !interrupted) {
         Some(l) => run
             .finish_with_loops(source.skipped(), l)
             .context("loop closure")?,
         None => run.finish(source.skipped()),
     };
     progress.bar.finish_and_clear();
-    Ok(run)
+    if interrupted {
+        tracing::warn!(
+            "{name}: interrupted after {} scans; the outputs hold the front end's poses of \
+             those, without loop closure",
+            run.report.scans
+        );
+    }
+    Ok((run, interrupted))
 }
 
 /// Writes `trajectory.tum`, `reference.tum` (when the log has poses), the maps and
@@ -397,13 +412,14 @@ pub fn run(args: SlamArgs) -> anyhow::Result<()> {
     let (params, loops) = load_params(args.config.as_deref())?;
     let loops = (!args.no_loop_closure).then_some(&loops);
     let mut live = args.live.start(args.resolution)?;
-    let mut run = run_log_live(
+    let (mut run, interrupted) = run_log_live(
         &args.log,
         args.topic.as_deref(),
         &params,
         loops,
         live.as_mut(),
         args.motion_prior,
+        true,
     )?;
     write_outputs(&args.out, &mut run, args.resolution, args.max_range)?;
     if let Some(v) = live {
@@ -443,6 +459,9 @@ pub fn run(args: SlamArgs) -> anyhow::Result<()> {
             r.start_to_end_m,
             args.out.display()
         );
+    }
+    if interrupted {
+        return Err(crate::interrupt::Interrupted.into());
     }
     Ok(())
 }
