@@ -115,7 +115,7 @@ fn scan_record_interrupted_finishes_the_recording() {
 }
 
 #[test]
-fn replay_and_slam_stop_on_ctrl_c_and_keep_what_they_read() {
+fn replay_slam_and_landmarks_stop_on_ctrl_c() {
     let dir = tempfile::tempdir().unwrap();
     let exp1 =
         Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/breezyslam/exp1.dat");
@@ -177,6 +177,31 @@ fn replay_and_slam_stop_on_ctrl_c_and_keep_what_they_read() {
     let lines = std::fs::read_to_string(out.join("trajectory.tum")).unwrap();
     let poses = lines.lines().filter(|l| !l.starts_with('#')).count() as u64;
     assert_eq!(poses, report["placed"].as_u64().unwrap());
+    // landmarks counts the same log for several seconds: it stops printing nothing.
+    let mut child = Command::new(BIN)
+        .args(["-q", "landmarks", "--log"])
+        .arg(&long)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn_locked();
+    std::thread::sleep(Duration::from_millis(1500));
+    sigint(&child);
+    let stopped = Instant::now();
+    let status = wait_at_most(&mut child, Duration::from_secs(30));
+    assert_eq!(status.code(), Some(130));
+    assert!(
+        stopped.elapsed() < Duration::from_secs(5),
+        "{:?}",
+        stopped.elapsed()
+    );
+    let mut printed = String::new();
+    child
+        .stdout
+        .take()
+        .unwrap()
+        .read_to_string(&mut printed)
+        .unwrap();
+    assert!(printed.is_empty(), "{printed}");
 }
 
 // In this process, not as a child: a child would inherit the emulator's end of the

@@ -73,6 +73,10 @@ pub fn run(args: MapArgs) -> anyhow::Result<()> {
         args.clear_no_return,
     );
     stats.scans = total;
+    // Reading and mapping hold no partial result worth writing: a stop request ends here.
+    if crate::interrupt::requested() {
+        return Err(crate::interrupt::Interrupted.into());
+    }
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("cannot create {}", args.out.display()))?;
     grid.write_map_server(&args.out, "map")?;
