@@ -114,33 +114,54 @@ fn scan_record_interrupted_finishes_the_recording() {
     }
 }
 
+/// Runs robot-app with `args` and sends SIGINT after `delay`: its exit status, how long it took
+/// to stop after the signal, and what it printed on stdout.
+fn interrupted_after(
+    args: &[&std::ffi::OsStr],
+    delay: Duration,
+) -> (std::process::ExitStatus, Duration, String) {
+    let mut child = Command::new(BIN)
+        .args(args)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn_locked();
+    // Read while it runs, so that a full pipe cannot hold it up.
+    let mut stdout = child.stdout.take().unwrap();
+    let reader = std::thread::spawn(move || {
+        let mut printed = String::new();
+        stdout.read_to_string(&mut printed).unwrap();
+        printed
+    });
+    std::thread::sleep(delay);
+    sigint(&child);
+    let stopped = Instant::now();
+    let status = wait_at_most(&mut child, Duration::from_secs(30));
+    let took = stopped.elapsed();
+    (status, took, reader.join().unwrap())
+}
+
 #[test]
 fn replay_slam_and_landmarks_stop_on_ctrl_c() {
     let dir = tempfile::tempdir().unwrap();
     let exp1 =
         Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/breezyslam/exp1.dat");
     assert!(exp1.exists(), "{} missing", exp1.display());
+    let os = |s: &'static str| std::ffi::OsStr::new(s);
     // replay paces the 75 s log in real time: Ctrl-C ends it within its 50 ms naps, and the
     // recording of the scans played so far is finished.
     let rec = dir.path().join("played.mcap");
-    let mut child = Command::new(BIN)
-        .args(["-q", "replay"])
-        .arg(&exp1)
-        .arg("--record")
-        .arg(&rec)
-        .stdout(Stdio::null())
-        .stderr(Stdio::piped())
-        .spawn_locked();
-    std::thread::sleep(Duration::from_secs(1));
-    sigint(&child);
-    let stopped = Instant::now();
-    let status = wait_at_most(&mut child, Duration::from_secs(20));
-    assert_eq!(status.code(), Some(130));
-    assert!(
-        stopped.elapsed() < Duration::from_secs(5),
-        "{:?}",
-        stopped.elapsed()
+    let (status, took, _) = interrupted_after(
+        &[
+            os("-q"),
+            os("replay"),
+            exp1.as_os_str(),
+            os("--record"),
+            rec.as_os_str(),
+        ],
+        Duration::from_secs(1),
     );
+    assert_eq!(status.code(), Some(130));
+    assert!(took < Duration::from_secs(5), "{took:?}");
     assert!(!partial_path(&rec).exists(), "a .partial file is left");
     let played = read_mcap(&rec).unwrap().len();
     assert!(
@@ -153,17 +174,17 @@ fn replay_slam_and_landmarks_stop_on_ctrl_c() {
     let long = dir.path().join("long.dat");
     std::fs::write(&long, text.repeat(20)).unwrap();
     let out = dir.path().join("slam");
-    let mut child = Command::new(BIN)
-        .args(["-q", "slam", "--log"])
-        .arg(&long)
-        .arg("--out")
-        .arg(&out)
-        .stdout(Stdio::null())
-        .stderr(Stdio::piped())
-        .spawn_locked();
-    std::thread::sleep(Duration::from_millis(1500));
-    sigint(&child);
-    let status = wait_at_most(&mut child, Duration::from_secs(30));
+    let (status, _, _) = interrupted_after(
+        &[
+            os("-q"),
+            os("slam"),
+            os("--log"),
+            long.as_os_str(),
+            os("--out"),
+            out.as_os_str(),
+        ],
+        Duration::from_millis(1500),
+    );
     assert_eq!(status.code(), Some(130));
     let report: serde_json::Value =
         serde_json::from_slice(&std::fs::read(out.join("slam.json")).unwrap()).unwrap();
@@ -178,29 +199,12 @@ fn replay_slam_and_landmarks_stop_on_ctrl_c() {
     let poses = lines.lines().filter(|l| !l.starts_with('#')).count() as u64;
     assert_eq!(poses, report["placed"].as_u64().unwrap());
     // landmarks counts the same log for several seconds: it stops printing nothing.
-    let mut child = Command::new(BIN)
-        .args(["-q", "landmarks", "--log"])
-        .arg(&long)
-        .stdout(Stdio::piped())
-        .stderr(Stdio::null())
-        .spawn_locked();
-    std::thread::sleep(Duration::from_millis(1500));
-    sigint(&child);
-    let stopped = Instant::now();
-    let status = wait_at_most(&mut child, Duration::from_secs(30));
-    assert_eq!(status.code(), Some(130));
-    assert!(
-        stopped.elapsed() < Duration::from_secs(5),
-        "{:?}",
-        stopped.elapsed()
+    let (status, took, printed) = interrupted_after(
+        &[os("-q"), os("landmarks"), os("--log"), long.as_os_str()],
+        Duration::from_millis(1500),
     );
-    let mut printed = String::new();
-    child
-        .stdout
-        .take()
-        .unwrap()
-        .read_to_string(&mut printed)
-        .unwrap();
+    assert_eq!(status.code(), Some(130));
+    assert!(took < Duration::from_secs(5), "{took:?}");
     assert!(printed.is_empty(), "{printed}");
 }
 
