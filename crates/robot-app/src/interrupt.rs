@@ -16,7 +16,7 @@ pub fn install() {
         if REQUESTED.swap(true, Ordering::SeqCst) {
             tracing::warn!("already stopping: the base is being stopped and outputs written");
         } else {
-            tracing::warn!("interrupted: stopping (a base gets `stop`) and writing the outputs");
+            tracing::warn!("interrupted: stopping cleanly");
         }
     });
     if let Err(e) = installed {

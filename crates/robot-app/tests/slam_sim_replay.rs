@@ -40,7 +40,7 @@ fn a_recorded_exploration_of_mbicp_replays_within_five_centimetres_of_the_truth(
             "--seed",
             "1",
             "--max-goals",
-            "13",
+            "15",
             "--world",
         ])
         .arg(&world)

@@ -284,7 +284,7 @@ fn bitmap_dark_below_by_hand() {
 
 #[test]
 fn worlds_far_from_the_origin_are_refused_by_name() {
-    // Past 1e6 m a 1 cm cell is below what the coordinates resolve: an error, never a panic.
+    // 1e6 m is the limit every loader shares; a bitmap centred at 1e308 used to panic.
     let dir = tempfile::tempdir().unwrap();
     let mut pgm = b"P5\n2 1\n255\n".to_vec();
     pgm.extend_from_slice(&[0, 255]);

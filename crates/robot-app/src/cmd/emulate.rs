@@ -167,15 +167,31 @@ pub fn run(args: EmulateArgs) -> anyhow::Result<()> {
             " or end of input"
         }
     );
-    if args.no_stdin {
-        loop {
-            std::thread::park();
-        }
+    // Standard input is read on a thread of its own, so that Ctrl-C is heard while it waits.
+    let (ended, input_end) = std::sync::mpsc::channel();
+    if !args.no_stdin {
+        std::thread::spawn(move || {
+            let mut sink = [0u8; 256];
+            let mut stdin = std::io::stdin().lock();
+            while stdin.read(&mut sink).map(|n| n > 0).unwrap_or(false) {}
+            let _ = ended.send(());
+        });
     }
-    let mut sink = [0u8; 256];
-    let mut stdin = std::io::stdin().lock();
-    while stdin.read(&mut sink).map(|n| n > 0).unwrap_or(false) {}
-    tracing::info!("end of input: stopping the emulator");
+    let interrupted = loop {
+        if crate::interrupt::requested() {
+            break true;
+        }
+        if input_end
+            .recv_timeout(std::time::Duration::from_millis(50))
+            .is_ok()
+        {
+            tracing::info!("end of input: stopping the emulator");
+            break false;
+        }
+    };
     server.stop();
+    if interrupted {
+        return Err(crate::interrupt::Interrupted.into());
+    }
     Ok(())
 }

@@ -68,11 +68,6 @@ pub fn run(args: LandmarksArgs) -> anyhow::Result<()> {
             Err(e) => return Err(e).context("reading the log"),
         }
     }
-    let mut out = std::io::stdout().lock();
-    if args.per_scan {
-        writeln!(out, "scan,found,reidentified_next,range_limit,dropout")?;
-    }
-    let mut total = LandmarkCounts::default();
     // In chunks (each with the next chunk's first scan, its pair), so that Ctrl-C is heard.
     let mut counts = Vec::with_capacity(records.len());
     for start in (0..records.len()).step_by(256) {
@@ -84,6 +79,11 @@ pub fn run(args: LandmarksArgs) -> anyhow::Result<()> {
         let chunk = count_log(&geometry, window, &detect_params, &track, args.dropout_rays);
         counts.extend(chunk.into_iter().take(end - start));
     }
+    let mut out = std::io::stdout().lock();
+    if args.per_scan {
+        writeln!(out, "scan,found,reidentified_next,range_limit,dropout")?;
+    }
+    let mut total = LandmarkCounts::default();
     for (k, c) in counts.iter().enumerate() {
         if args.per_scan {
             writeln!(

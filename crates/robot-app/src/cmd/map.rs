@@ -59,6 +59,9 @@ pub fn run(args: MapArgs) -> anyhow::Result<()> {
     let (scans, total) = source
         .posed_scans(args.pose == "true")
         .context("reading the log")?;
+    if crate::interrupt::requested() {
+        return Err(crate::interrupt::Interrupted.into());
+    }
     if scans.is_empty() {
         anyhow::bail!(
             "{}: none of its {total} scans has a pose; 'robot-app map' needs a log with poses (e.g. a CARMEN corrected log)",
@@ -73,7 +76,7 @@ pub fn run(args: MapArgs) -> anyhow::Result<()> {
         args.clear_no_return,
     );
     stats.scans = total;
-    // Reading and mapping hold no partial result worth writing: a stop request ends here.
+    // A map of part of the log is not written: a stop request ends here.
     if crate::interrupt::requested() {
         return Err(crate::interrupt::Interrupted.into());
     }

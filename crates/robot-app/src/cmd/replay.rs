@@ -193,6 +193,9 @@ fn run_loop<W: Write>(args: &ReplayArgs, out: &mut W) -> anyhow::Result<()> {
     let compared = compare_legs(&args.file, &log.leg_summaries(), o.legs_driven, out);
     out.flush()?;
     compared?;
+    if o.reason == crate::outputs::Reason::Interrupted {
+        return Err(crate::interrupt::Interrupted.into());
+    }
     if o.reason != crate::outputs::Reason::Reached {
         anyhow::bail!(
             "the replayed run did not reach the target: {} ({})",

@@ -91,35 +91,35 @@ pub fn build(args: &BatchArgs) -> anyhow::Result<Vec<Job>> {
 
 /// Refuses a batch too large to plan: its generated worlds and jobs are held in memory
 /// before the first run.
-fn check_size(
+pub(crate) fn check_size(
     args: &BatchArgs,
     seeds: &std::ops::Range<u64>,
     methods: usize,
 ) -> anyhow::Result<()> {
-    for (flag, k) in [
-        ("--random-worlds", args.random_worlds),
-        ("--corridor-worlds", args.corridor_worlds),
-        ("--clutter-worlds", args.clutter_worlds),
-    ] {
-        if k > MAX_GENERATED_WORLDS {
-            anyhow::bail!(
-                "{flag} {k}: at most {MAX_GENERATED_WORLDS} generated worlds of a kind (each is \
-                 held in memory); split the batch"
-            );
-        }
+    let generated =
+        args.random_worlds as u64 + args.corridor_worlds as u64 + args.clutter_worlds as u64;
+    if generated > MAX_GENERATED_WORLDS {
+        anyhow::bail!(
+            "--random-worlds {}, --corridor-worlds {}, --clutter-worlds {}: at most \
+             {MAX_GENERATED_WORLDS} generated worlds in all (each is held in memory); split \
+             the batch",
+            args.random_worlds,
+            args.corridor_worlds,
+            args.clutter_worlds
+        );
     }
-    let named = if args.worlds.is_empty() {
-        1
-    } else {
-        args.worlds.len()
+    // The paper's world stands in only when no world is named or generated (as in `worlds`).
+    let named = match (args.worlds.len(), generated) {
+        (0, 0) => 1,
+        (n, _) => n as u64,
     };
-    let worlds = (named + args.random_worlds + args.corridor_worlds + args.clutter_worlds) as u64;
-    let per_seed = u64::from(args.scenarios != "pairs") * (seeds.end - seeds.start);
+    let worlds = named + generated;
+    let seeds_n = seeds.end - seeds.start;
+    let per_seed = u64::from(args.scenarios != "pairs") * seeds_n;
     let pairs = if args.scenarios == "paper" {
         0
     } else {
-        args.random_pairs
-            .map_or(seeds.end - seeds.start, |n| n as u64)
+        args.random_pairs.map_or(seeds_n, |n| n as u64)
     };
     let runs = per_seed
         .checked_add(pairs)
@@ -127,11 +127,14 @@ fn check_size(
         .and_then(|r| r.checked_mul(methods as u64))
         .unwrap_or(u64::MAX);
     if runs > MAX_RUNS {
+        let asked = match args.random_pairs.filter(|_| args.scenarios != "paper") {
+            Some(n) => format!("--seeds {} and --random-pairs {n}", args.seeds),
+            None => format!("--seeds {}", args.seeds),
+        };
         let n = |k: u64, what: &str| format!("{k} {what}{}", if k == 1 { "" } else { "s" });
         anyhow::bail!(
-            "--seeds {}: with {} and {} that is more than {MAX_RUNS} runs, the most one \
-             batch holds; split it",
-            args.seeds,
+            "{asked}: with {} and {} that is more than {MAX_RUNS} runs, the most one batch \
+             holds; split it",
             n(worlds, "world"),
             n(methods as u64, "method")
         );
@@ -260,6 +263,73 @@ fn world_jobs(w: &WorldEntry, plan: &Plan, jobs: &mut Vec<Job>) {
             "{missing} of {} pairs skipped: no start and target {} m apart in one free region; lower --min-distance",
             plan.n_pairs,
             plan.min_distance_m
+        );
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::Parser;
+
+    #[derive(Parser)]
+    struct Cli {
+        #[command(flatten)]
+        args: BatchArgs,
+    }
+
+    fn checked(cli: &[&str]) -> anyhow::Result<()> {
+        let a = Cli::try_parse_from(std::iter::once("batch").chain(cli.iter().copied()))
+            .unwrap()
+            .args;
+        check_size(&a, &parse_seeds(&a.seeds)?, a.method.len())
+    }
+
+    #[test]
+    fn the_run_limit_counts_worlds_scenarios_pairs_and_methods() {
+        // The paper's world, its scenario and one pair per seed: 2 runs a seed and method.
+        assert!(checked(&["--seeds", "0..25000", "--method", "goalseek,paper"]).is_ok());
+        let e = checked(&["--seeds", "0..25001", "--method", "goalseek,paper"]).unwrap_err();
+        assert!(e.to_string().contains("1 world and 2 methods"), "{e}");
+        // 1000 generated worlds stand without the paper's: 1000 x 100 scenario runs.
+        assert!(
+            checked(&[
+                "--clutter-worlds",
+                "1000",
+                "--seeds",
+                "0..100",
+                "--scenarios",
+                "paper"
+            ])
+            .is_ok()
+        );
+        let e = checked(&[
+            "--clutter-worlds",
+            "1000",
+            "--seeds",
+            "0..101",
+            "--scenarios",
+            "paper",
+        ])
+        .unwrap_err();
+        assert!(e.to_string().contains("1000 worlds and 1 method"), "{e}");
+        // The pairs asked for, not the seeds, make this one too large, and are named.
+        assert!(checked(&["--scenarios", "pairs", "--random-pairs", "100000"]).is_ok());
+        let e = checked(&["--scenarios", "pairs", "--random-pairs", "100001"]).unwrap_err();
+        assert!(e.to_string().contains("--random-pairs 100001"), "{e}");
+        // Generated worlds are capped in all.
+        let e = checked(&[
+            "--random-worlds",
+            "500",
+            "--clutter-worlds",
+            "501",
+            "--seeds",
+            "0..1",
+        ])
+        .unwrap_err();
+        assert!(
+            e.to_string().contains("1000 generated worlds in all"),
+            "{e}"
         );
     }
 }

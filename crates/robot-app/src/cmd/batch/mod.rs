@@ -78,8 +78,8 @@ pub struct BatchArgs {
 
 /// Most runs one batch (or `explore --seeds`) may hold.
 pub const MAX_RUNS: u64 = 100_000;
-/// Most generated worlds of each kind in one batch.
-pub const MAX_GENERATED_WORLDS: usize = 1_000;
+/// Most generated worlds, of all kinds together, in one batch.
+pub const MAX_GENERATED_WORLDS: u64 = 1_000;
 
 /// Parses `A..B` (B excluded) or a single seed.
 pub fn parse_seeds(s: &str) -> anyhow::Result<std::ops::Range<u64>> {
