@@ -29,6 +29,29 @@ pub fn requested() -> bool {
     REQUESTED.load(Ordering::SeqCst)
 }
 
+/// [`Interrupted`] once a stop was asked for, for a command that keeps nothing of its work.
+pub fn check() -> anyhow::Result<()> {
+    if requested() {
+        return Err(Interrupted.into());
+    }
+    Ok(())
+}
+
+/// Waits `duration` in naps of at most 50 ms; false when a stop request ended the wait.
+pub fn sleep(duration: std::time::Duration) -> bool {
+    let until = std::time::Instant::now() + duration;
+    loop {
+        if requested() {
+            return false;
+        }
+        let left = until.saturating_duration_since(std::time::Instant::now());
+        if left.is_zero() {
+            return true;
+        }
+        std::thread::sleep(left.min(std::time::Duration::from_millis(50)));
+    }
+}
+
 /// The error a command returns when it stopped because of a signal, after writing its
 /// outputs; `main` turns it into [`EXIT_CODE`].
 #[derive(Debug)]

@@ -59,9 +59,7 @@ pub fn run(args: LandmarksArgs) -> anyhow::Result<()> {
     }
     let mut records = Vec::new();
     loop {
-        if crate::interrupt::requested() {
-            return Err(crate::interrupt::Interrupted.into());
-        }
+        crate::interrupt::check()?;
         match source.next_record() {
             Ok(r) => records.push((r.scan.clone(), r.pose.or(r.true_pose))),
             Err(e) if e.is_end_of_log() => break,
@@ -71,9 +69,7 @@ pub fn run(args: LandmarksArgs) -> anyhow::Result<()> {
     // In chunks (each with the next chunk's first scan, its pair), so that Ctrl-C is heard.
     let mut counts = Vec::with_capacity(records.len());
     for start in (0..records.len()).step_by(256) {
-        if crate::interrupt::requested() {
-            return Err(crate::interrupt::Interrupted.into());
-        }
+        crate::interrupt::check()?;
         let end = (start + 256).min(records.len());
         let window = &records[start..(end + 1).min(records.len())];
         let chunk = count_log(&geometry, window, &detect_params, &track, args.dropout_rays);

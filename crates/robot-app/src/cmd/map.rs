@@ -59,9 +59,7 @@ pub fn run(args: MapArgs) -> anyhow::Result<()> {
     let (scans, total) = source
         .posed_scans(args.pose == "true")
         .context("reading the log")?;
-    if crate::interrupt::requested() {
-        return Err(crate::interrupt::Interrupted.into());
-    }
+    crate::interrupt::check()?;
     if scans.is_empty() {
         anyhow::bail!(
             "{}: none of its {total} scans has a pose; 'robot-app map' needs a log with poses (e.g. a CARMEN corrected log)",
@@ -77,9 +75,7 @@ pub fn run(args: MapArgs) -> anyhow::Result<()> {
     );
     stats.scans = total;
     // A map of part of the log is not written: a stop request ends here.
-    if crate::interrupt::requested() {
-        return Err(crate::interrupt::Interrupted.into());
-    }
+    crate::interrupt::check()?;
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("cannot create {}", args.out.display()))?;
     grid.write_map_server(&args.out, "map")?;

@@ -99,7 +99,9 @@ pub fn run_to<W: Write>(args: &ReplayArgs, out: &mut W) -> anyhow::Result<()> {
             let t0 = *first_stamp.get_or_insert(scan.host_time_s);
             let due = (scan.host_time_s - t0) / args.rate;
             let now = started.elapsed().as_secs_f64();
-            if due > now && !pause(due - now) {
+            // At most a minute: a log's clock can jump.
+            if due > now && !crate::interrupt::sleep(Duration::from_secs_f64((due - now).min(60.0)))
+            {
                 interrupted = true;
                 break;
             }
@@ -131,22 +133,6 @@ pub fn run_to<W: Write>(args: &ReplayArgs, out: &mut W) -> anyhow::Result<()> {
         return Err(crate::interrupt::Interrupted.into());
     }
     Ok(())
-}
-
-/// Waits `seconds` (at most a minute: a log's clock can jump), in short naps so that a stop
-/// request ends the wait; false when one did.
-fn pause(seconds: f64) -> bool {
-    let until = Instant::now() + Duration::from_secs_f64(seconds.min(60.0));
-    loop {
-        if crate::interrupt::requested() {
-            return false;
-        }
-        let left = until.saturating_duration_since(Instant::now());
-        if left.is_zero() {
-            return true;
-        }
-        std::thread::sleep(left.min(Duration::from_millis(50)));
-    }
 }
 
 /// `robot-app replay FILE --loop`: the recorded scans through the loop; fails if the legs

@@ -112,9 +112,7 @@ fn generate(a: GenerateArgs) -> anyhow::Result<()> {
     let mut out = std::io::stdout().lock();
     for seed in a.seed..a.seed.saturating_add(a.count.max(1)) {
         // The worlds written so far are whole (each file is written atomically).
-        if crate::interrupt::requested() {
-            return Err(crate::interrupt::Interrupted.into());
-        }
+        crate::interrupt::check()?;
         let path = PathBuf::from(template.replace("{seed}", &seed.to_string()));
         let desc = generate_world(seed, &params)?;
         if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {

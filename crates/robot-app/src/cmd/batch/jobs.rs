@@ -108,12 +108,7 @@ pub(crate) fn check_size(
             args.clutter_worlds
         );
     }
-    // The paper's world stands in only when no world is named or generated (as in `worlds`).
-    let named = match (args.worlds.len(), generated) {
-        (0, 0) => 1,
-        (n, _) => n as u64,
-    };
-    let worlds = named + generated;
+    let worlds = world_names(args).len() as u64 + generated;
     let seeds_n = seeds.end - seeds.start;
     let per_seed = u64::from(args.scenarios != "pairs") * seeds_n;
     let pairs = if args.scenarios == "paper" {
@@ -142,10 +137,9 @@ pub(crate) fn check_size(
     Ok(())
 }
 
-/// The worlds named by `--worlds` (default: the paper's), then the generated ones.
-fn worlds(args: &BatchArgs, configs: &[Params]) -> anyhow::Result<Vec<WorldEntry>> {
-    let mut worlds: Vec<WorldEntry> = Vec::new();
-    let names = if args.worlds.is_empty()
+/// The worlds named by `--worlds`; the paper's when none is named or generated.
+fn world_names(args: &BatchArgs) -> Vec<String> {
+    if args.worlds.is_empty()
         && args.random_worlds == 0
         && args.corridor_worlds == 0
         && args.clutter_worlds == 0
@@ -153,8 +147,13 @@ fn worlds(args: &BatchArgs, configs: &[Params]) -> anyhow::Result<Vec<WorldEntry
         vec!["paper".to_string()]
     } else {
         args.worlds.clone()
-    };
-    for w in &names {
+    }
+}
+
+/// The worlds named by `--worlds` (default: the paper's), then the generated ones.
+fn worlds(args: &BatchArgs, configs: &[Params]) -> anyhow::Result<Vec<WorldEntry>> {
+    let mut worlds: Vec<WorldEntry> = Vec::new();
+    for w in &world_names(args) {
         if w == "paper" {
             worlds.push(WorldEntry {
                 setup: SimSetup::load(None)?,
