@@ -12,7 +12,7 @@
 //!
 //! let geometry = ScanGeometry::paper();
 //! let start = Pose2::new(0.0, 0.0, 0.0);
-//! let goal = WorldPoint::new(0.1, 0.0); // within the goal tolerance of the start
+//! let goal = WorldPoint::new(0.04, 0.0); // within the final approach's 0.05 m of the start
 //! let mut nav = Navigator::new(Params::goalseek(), geometry, start, goal).unwrap();
 //! assert_eq!(nav.pending(), Action::Scan);
 //! // Nothing in range: every ray is a max-range reading.

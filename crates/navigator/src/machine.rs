@@ -167,6 +167,8 @@ pub struct Navigator {
     axes: Option<Axes>,
     /// Cycles begun beside a target inside a mapped obstacle's clearance.
     blocked_target_seen: usize,
+    /// `[navigator] final_approach_m`: the approach to this target has been made.
+    approached: bool,
     /// Legs ended early by `[planner] replan_step_m`.
     legs_cut_short: usize,
 }
@@ -258,6 +260,7 @@ impl Navigator {
             last_revisit_leg: 0,
             axes: None,
             blocked_target_seen: 0,
+            approached: false,
             legs_cut_short: 0,
         })
     }
@@ -432,6 +435,7 @@ impl Navigator {
         self.end = None;
         self.legs_before_goal = self.legs;
         self.blocked_target_seen = 0;
+        self.approached = false;
         self.leg_limit = self.params.leg_limit(self.estimate.position(), goal);
         self.failures = 0;
         self.narrow_misses = 0;
@@ -512,6 +516,29 @@ impl Navigator {
         let beside = self.beside_blocked_target(to_goal);
         let n = &self.params.navigator;
         if to_goal <= n.goal_tolerance_m || beside.is_some() {
+            if beside.is_none()
+                && !self.approached
+                && n.final_approach_m > 0.0
+                && to_goal > n.final_approach_m.max(n.min_leg_m)
+            {
+                // Within tolerance but not at the target: one leg aimed at the target itself.
+                self.approached = true;
+                let alpha_rad = self
+                    .estimate
+                    .inverse_transform_point(self.goal)
+                    .bearing_rad();
+                tracing::debug!(
+                    to_goal,
+                    alpha_deg = alpha_rad.to_degrees(),
+                    "final approach"
+                );
+                let then = AfterTurn::Leg {
+                    travel_m: to_goal,
+                    target_in_view: true,
+                    narrow: None,
+                };
+                return self.start_turn(alpha_rad, scan, then);
+            }
             if n.flag_uncertain_arrival && self.sigma_position_m > n.arrival_max_sigma_m {
                 let note = format!(
                     "the estimate reached the target but its position uncertainty is {:.2} m (more than {:.2} m)",

@@ -504,6 +504,11 @@ pub struct LoopParams {
     pub legs_per_m: f64,
     /// The estimate within this of the target counts as arrival, metres.
     pub goal_tolerance_m: f64,
+    /// An arrival farther than this from the target by the estimate first turns to the
+    /// target and drives to it, once; the arrival stands if that leg cannot be driven, metres
+    /// (0: never, also what a stored configuration without the key means).
+    #[serde(default)]
+    pub final_approach_m: f64,
     /// Planning failures in a row (no safe ray, no progress) before the goal is unreachable.
     pub max_failed_tries: usize,
     /// Turn in place by this much when no safe ray exists, degrees.
@@ -679,6 +684,7 @@ impl Params {
                 min_legs: 60,
                 legs_per_m: 12.0,
                 goal_tolerance_m: 0.15,
+                final_approach_m: 0.05,
                 max_failed_tries: 8,
                 recovery_turn_deg: 60.0,
                 rotation_chunk_deg: 90.0,
@@ -724,6 +730,7 @@ impl Params {
         // Its greedy rule loops where a wall blocks it: more legs only lengthen the loop.
         c.navigator.legs_per_m = 4.0;
         c.navigator.blocked_target_plans = 0;
+        c.navigator.final_approach_m = 0.0;
         c
     }
 
@@ -839,6 +846,7 @@ impl Params {
             ("navigator.min_legs", count(n.min_legs), 1.0, 1e6, false),
             ("navigator.legs_per_m", n.legs_per_m, 0.0, 1000.0, false),
             ("navigator.goal_tolerance_m", n.goal_tolerance_m, 0.0, 10.0, true),
+            ("navigator.final_approach_m", n.final_approach_m, 0.0, 10.0, false),
             ("navigator.max_failed_tries", count(n.max_failed_tries), 1.0, 1000.0, false),
             ("navigator.recovery_turn_deg", n.recovery_turn_deg, 0.0, 180.0, true),
             ("navigator.rotation_chunk_deg", n.rotation_chunk_deg, 0.0, 180.0, true),

@@ -15,13 +15,30 @@ fn robot_app(args: &[&str]) -> Output {
         .expect("robot-app runs")
 }
 
+/// `robot_app` with its address space capped at 2 GiB (`ulimit -v`), so that a regression
+/// that plans in memory fails here instead of taking the machine's memory.
+fn robot_app_capped(args: &[&str]) -> Output {
+    Command::new("sh")
+        .arg("-c")
+        .arg("ulimit -v 2097152 && exec \"$0\" \"$@\"")
+        .arg(env!("CARGO_BIN_EXE_robot-app"))
+        .args(args)
+        .stdin(Stdio::null())
+        .output()
+        .expect("sh runs robot-app")
+}
+
 fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
 }
 
 /// Fails with exit status 1 (not a panic's 101) and a message holding every `needle`.
 fn fails_naming(args: &[&str], needles: &[&str]) -> String {
-    let o = robot_app(args);
+    fails_naming_with(robot_app(args), args, needles)
+}
+
+/// [`fails_naming`] on an output already taken.
+fn fails_naming_with(o: Output, args: &[&str], needles: &[&str]) -> String {
     let e = stderr(&o);
     assert_eq!(o.status.code(), Some(1), "{args:?}: {e}");
     for n in needles {
@@ -260,12 +277,15 @@ fn batches_too_large_to_plan_are_refused_before_they_take_the_memory() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("b");
     let out = out.to_str().unwrap();
-    fails_naming(
+    let capped = |args: &[&str], needles: &[&str]| {
+        fails_naming_with(robot_app_capped(args), args, needles);
+    };
+    capped(
         &["batch", "--seeds", "0..99999999999", "--out", out],
         &["--seeds 0..99999999999", "100000 runs"],
     );
     // Past u64: the count saturates instead of wrapping to a small number.
-    fails_naming(
+    capped(
         &[
             "batch",
             "--random-pairs",
@@ -277,11 +297,11 @@ fn batches_too_large_to_plan_are_refused_before_they_take_the_memory() {
         ],
         &["100000 runs"],
     );
-    fails_naming(
+    capped(
         &["batch", "--random-worlds", "5000", "--out", out],
         &["--random-worlds 5000", "1000 generated worlds"],
     );
-    fails_naming(
+    capped(
         &["explore", "--seeds", "0..99999999999", "--out", out],
         &["--seeds 0..99999999999", "100000"],
     );

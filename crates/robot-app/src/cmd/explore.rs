@@ -165,14 +165,15 @@ struct Explored {
 
 /// Exploring's own defaults over the method's preset: the planner's line of sight, the
 /// travel on a round landmark's centre and the tracker's range-limit rule off (measured no
-/// better for exploring, `docs/explore.md`), and no arrival beside a target inside a wall's
-/// clearance (a frontier goal ends when its frontier is mapped). A `--config` file may still
-/// turn them on.
+/// better for exploring, `docs/explore.md`), no arrival beside a target inside a wall's
+/// clearance (a frontier goal ends when its frontier is mapped) and no final approach (a
+/// frontier goal needs no exact arrival). A `--config` file may still turn them on.
 pub fn explore_defaults(p: &mut crate::config::Params) {
     p.planner.line_of_sight = false;
     p.tracking.round_centre = false;
     p.tracking.reject_near_range_limit = false;
     p.navigator.blocked_target_plans = 0;
+    p.navigator.final_approach_m = 0.0;
 }
 
 /// Runs `robot-app explore`: in the simulator, or with `--port` on a real Hokuyo and base.
