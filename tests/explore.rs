@@ -116,12 +116,13 @@ fn the_paper_world_is_explored_without_a_goal() {
     assert!(s["coverage_share"].as_f64().unwrap() >= 0.95, "{s}");
     assert!(s["map_accuracy_share"].as_f64().unwrap() >= 0.98, "{s}");
     // Exploring's own defaults: the planner's line of sight, the travel on a round landmark's
-    // centre, the tracker's range-limit rule and the arrival beside a blocked target off (goal
-    // seeking's preset has them).
+    // centre, the tracker's range-limit rule, the arrival beside a blocked target and the final
+    // approach off (goal seeking's preset has them).
     let used = robot_app::config::load(Some(&out.join("config.toml")), None).unwrap();
     let t = &used.tracking;
     assert!(!used.planner.line_of_sight && !t.round_centre && !t.reject_near_range_limit);
     assert_eq!(used.navigator.blocked_target_plans, 0);
+    assert_eq!(used.navigator.final_approach_m, 0.0);
     let goalseek = robot_app::config::Params::goalseek();
     let t = &goalseek.tracking;
     assert!(goalseek.planner.line_of_sight && t.round_centre && t.reject_near_range_limit);
@@ -282,8 +283,8 @@ fn revisits_keep_the_map_of_simple_rooms_accurate() {
     );
 }
 
-/// Exploring starts from the preset with the planner's line of sight, two tracking rules and
-/// the arrival beside a blocked target off; a `--config` file still sets them, and a file that
+/// Exploring starts from the preset with the planner's line of sight, two tracking rules, the
+/// arrival beside a blocked target and the final approach off; a `--config` file still sets them, and a file that
 /// sets other keys leaves them off.
 #[test]
 fn explore_defaults_sit_under_the_config_file() {
@@ -295,10 +296,12 @@ fn explore_defaults_sit_under_the_config_file() {
     expected.tracking.round_centre = false;
     expected.tracking.reject_near_range_limit = false;
     expected.navigator.blocked_target_plans = 0;
+    expected.navigator.final_approach_m = 0.0;
     assert_eq!(bare, expected);
     let on = from_toml_str_over(
         "[planner]\nline_of_sight = true\n[tracking]\nround_centre = true\n\
-         reject_near_range_limit = true\n[navigator]\nblocked_target_plans = 3\n",
+         reject_near_range_limit = true\n[navigator]\nblocked_target_plans = 3\n\
+         final_approach_m = 0.05\n",
         None,
         explore_defaults,
     );

@@ -510,16 +510,25 @@ impl Navigator {
         self.planner.add_scan(&self.estimate, &self.geometry, scan);
     }
 
-    /// The top of a cycle: stop, or expand, plan and start the turn onto the chosen ray.
+    /// The top of a cycle: stop, make the final approach, or expand, plan and start the turn
+    /// onto the chosen ray.
     fn plan_next(&mut self, scan: Scan) -> Action {
         let to_goal = self.estimate.position().distance_m(&self.goal);
         let beside = self.beside_blocked_target(to_goal);
         let n = &self.params.navigator;
         if to_goal <= n.goal_tolerance_m || beside.is_some() {
+            if n.flag_uncertain_arrival && self.sigma_position_m > n.arrival_max_sigma_m {
+                let note = format!(
+                    "the estimate reached the target but its position uncertainty is {:.2} m (more than {:.2} m)",
+                    self.sigma_position_m, n.arrival_max_sigma_m
+                );
+                return self.finish(Reason::UncertainArrival, note);
+            }
             if beside.is_none()
                 && !self.approached
                 && n.final_approach_m > 0.0
                 && to_goal > n.final_approach_m.max(n.min_leg_m)
+                && self.legs - self.legs_before_goal < self.leg_limit
             {
                 // Within tolerance but not at the target: one leg aimed at the target itself.
                 self.approached = true;
@@ -538,13 +547,6 @@ impl Navigator {
                     narrow: None,
                 };
                 return self.start_turn(alpha_rad, scan, then);
-            }
-            if n.flag_uncertain_arrival && self.sigma_position_m > n.arrival_max_sigma_m {
-                let note = format!(
-                    "the estimate reached the target but its position uncertainty is {:.2} m (more than {:.2} m)",
-                    self.sigma_position_m, n.arrival_max_sigma_m
-                );
-                return self.finish(Reason::UncertainArrival, note);
             }
             let note = beside.unwrap_or_else(|| "estimate within tolerance of the target".into());
             return self.finish(Reason::Reached, note);

@@ -504,9 +504,8 @@ pub struct LoopParams {
     pub legs_per_m: f64,
     /// The estimate within this of the target counts as arrival, metres.
     pub goal_tolerance_m: f64,
-    /// An arrival farther than this from the target by the estimate first turns to the
-    /// target and drives to it, once; the arrival stands if that leg cannot be driven, metres
-    /// (0: never, also what a stored configuration without the key means).
+    /// An arrival farther than this (and than `min_leg_m`) from the target first drives onto
+    /// it, once, within the leg limit, metres (0: never, also a stored configuration without it).
     #[serde(default)]
     pub final_approach_m: f64,
     /// Planning failures in a row (no safe ray, no progress) before the goal is unreachable.
