@@ -159,6 +159,9 @@ pub struct Navigator {
     sigma_heading_rad: f64,
     /// The estimate's position uncertainty (one standard deviation), metres.
     sigma_position_m: f64,
+    /// Covariance of the estimate's position (x, y) with its heading, metre radians: what
+    /// the legs driven on an uncertain heading carry of it.
+    cov_position_heading: [f64; 2],
     /// Leg ends kept for `[localiser] revisit`.
     revisits: Revisits,
     /// The leg of the last revisit correction (0: none yet).
@@ -256,6 +259,7 @@ impl Navigator {
             slam_leg_pose: None,
             sigma_heading_rad: 0.0,
             sigma_position_m: 0.0,
+            cov_position_heading: [0.0; 2],
             revisits: Revisits::default(),
             last_revisit_leg: 0,
             axes: None,
@@ -1101,6 +1105,14 @@ impl Navigator {
         };
         self.sigma_position_m =
             self.sigma_position_m.hypot(share * driven) + driven * self.sigma_heading_rad;
+        // The leg's end moves by (-dy, dx) per radian of heading error at its origin.
+        let (dx, dy) = (
+            self.estimate.x_m - drive.origin.x_m,
+            self.estimate.y_m - drive.origin.y_m,
+        );
+        let p_hh = self.sigma_heading_rad.powi(2);
+        self.cov_position_heading[0] -= dy * p_hh;
+        self.cov_position_heading[1] += dx * p_hh;
         self.square_up(&drive.last_scan);
         if self.params.localiser.revisit && drive.commanded_m > 0.0 {
             self.revisit(&drive.last_scan);
@@ -1196,6 +1208,16 @@ impl Navigator {
             scan_types::normalize_angle_rad(self.estimate.theta_rad + k_h * off);
         // (I - K H) P with H = [-1, 1].
         let new_hh = p_hh + k_h * (p_hh - p_ha);
+        if l.rectilinear_moves_position && p_hh > 0.0 {
+            // The position's gain, with the position correlated with the axes only through
+            // the heading: P_ph / P_hh times the heading's correction; its covariance with
+            // the heading shrinks as the heading's variance does.
+            let [c_x, c_y] = self.cov_position_heading;
+            self.estimate.x_m += c_x / p_hh * k_h * off;
+            self.estimate.y_m += c_y / p_hh * k_h * off;
+            let shrink = new_hh.max(0.0) / p_hh;
+            self.cov_position_heading = [c_x * shrink, c_y * shrink];
+        }
         let new_ha = p_ha + k_h * (p_ha - p_aa);
         let new_aa = p_aa - k_a * (p_aa - p_ha);
         self.sigma_heading_rad = new_hh.max(0.0).sqrt();
@@ -1204,6 +1226,18 @@ impl Navigator {
             var_rad2: new_aa.max(0.0),
             cov_heading_rad2: new_ha,
         });
+    }
+
+    /// Sets the heading's uncertainty, its covariance with the position shrinking with it.
+    fn scale_heading_sigma(&mut self, sigma_rad: f64) {
+        let old = self.sigma_heading_rad;
+        let shrink = if old > 0.0 {
+            (sigma_rad / old).powi(2).min(1.0)
+        } else {
+            0.0
+        };
+        self.cov_position_heading = self.cov_position_heading.map(|c| c * shrink);
+        self.sigma_heading_rad = sigma_rad;
     }
 
     /// `[localiser] revisit`: corrects the estimate by the earlier leg ends near it, and keeps
@@ -1225,7 +1259,7 @@ impl Navigator {
                 .distribute(from, self.legs, self.estimate, c.pose);
             self.estimate = c.pose;
             self.sigma_position_m = c.sigma_m;
-            self.sigma_heading_rad = c.sigma_heading_rad;
+            self.scale_heading_sigma(c.sigma_heading_rad);
             self.last_revisit_leg = self.legs;
             self.grid = self
                 .revisits

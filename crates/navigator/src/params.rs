@@ -339,6 +339,11 @@ pub struct LocaliserParams {
     /// Share of a scan's straight-wall fits that must run along one pair of axes (0..1).
     #[serde(default = "default_rectilinear_min_share")]
     pub rectilinear_min_share: f64,
+    /// A heading corrected by the walls also moves the position, by the correlation the legs
+    /// driven on the uncertain heading built between the two. Absent from a stored
+    /// configuration, it is off (as the runs recorded before it).
+    #[serde(default)]
+    pub rectilinear_moves_position: bool,
 }
 
 fn default_rectilinear_sigma_deg() -> f64 {
@@ -669,6 +674,7 @@ impl Params {
                 rectilinear_gate_sigmas: default_rectilinear_gate_sigmas(),
                 rectilinear_max_deg: default_rectilinear_max_deg(),
                 rectilinear_min_share: default_rectilinear_min_share(),
+                rectilinear_moves_position: false,
                 slam_smoothing_m: default_slam_smoothing_m(),
                 slam_fuse_prediction: true,
                 slam_line_scatter: 0.03,

@@ -14,10 +14,16 @@ mod room;
 /// every command, with the heading from the commands alone (no scan measures a turn); returns
 /// how it ended, the final estimate and the true pose.
 fn run(rectilinear: bool, turn_scale: f64) -> (Reason, Pose2, Pose2) {
+    run_with(rectilinear, false, turn_scale)
+}
+
+/// As [`run`], with `[localiser] rectilinear_moves_position` set to `moves`.
+fn run_with(rectilinear: bool, moves: bool, turn_scale: f64) -> (Reason, Pose2, Pose2) {
     let mut p = Params::goalseek();
     p.localiser.heading_rule = HeadingRule::Commanded;
     p.localiser.travel_rule = TravelRule::Landmark;
     p.localiser.rectilinear = rectilinear;
+    p.localiser.rectilinear_moves_position = moves;
     let start = Pose2::new(1.0, 1.0, 0.0);
     let goal = WorldPoint::new(7.0, 4.0);
     let mut nav = Navigator::new(p, ScanGeometry::paper(), start, goal).unwrap();
@@ -70,9 +76,17 @@ fn a_stored_configuration_without_the_key_keeps_it_off() {
         localiser.remove("rectilinear"),
         Some(serde_json::json!(true))
     );
+    assert_eq!(
+        localiser.remove("rectilinear_moves_position"),
+        Some(serde_json::json!(
+            Params::goalseek().localiser.rectilinear_moves_position
+        ))
+    );
     let old: Params = serde_json::from_value(v).unwrap();
     assert!(!old.localiser.rectilinear);
+    assert!(!old.localiser.rectilinear_moves_position);
     assert!(!Params::paper().localiser.rectilinear);
+    assert!(!Params::paper().localiser.rectilinear_moves_position);
 }
 
 #[test]
@@ -132,4 +146,33 @@ fn the_walls_shrink_the_heading_uncertainty_as_a_kalman_filter_does() {
         "{} vs {position}",
         last.position_sigma_m
     );
+}
+
+#[test]
+fn a_corrected_heading_moves_the_position_its_error_displaced() {
+    // The base turns 4 % short: every leg after a turn runs off the estimate's heading until
+    // the walls square it up, and its end lies to the side by the leg times that error.
+    // Moving the position with the heading takes part of that off.
+    let (_, est0, truth0) = run_with(true, false, 0.96);
+    let (reason, est, truth) = run_with(true, true, 0.96);
+    assert_eq!(reason, Reason::Reached);
+    let (e0, e) = (
+        est0.position().distance_m(&truth0.position()),
+        est.position().distance_m(&truth.position()),
+    );
+    assert!(e < 0.8 * e0, "{e:.3} m against {e0:.3} m");
+}
+
+#[test]
+fn an_exact_base_keeps_its_position() {
+    // Nothing to correct: the walls' own error turns the heading by hundredths of a degree,
+    // which move the position by well under a millimetre over the run.
+    let (_, est0, truth0) = run_with(true, false, 1.0);
+    let (reason, est, truth) = run_with(true, true, 1.0);
+    assert_eq!(reason, Reason::Reached);
+    let (e0, e) = (
+        est0.position().distance_m(&truth0.position()),
+        est.position().distance_m(&truth.position()),
+    );
+    assert!((e - e0).abs() < 0.001, "{e:.4} m against {e0:.4} m");
 }

@@ -415,6 +415,31 @@ mod batch_table {
         assert!(t.contains("paper    goalseek"), "{t}");
         // No row has a geodesic: no SPL.
         assert_eq!((a[0].spl, a[0].spl_runs), (None, 0));
+        // Nor an uncertainty.
+        assert_eq!(
+            (a[0].median_final_sigma_m, a[0].within_final_sigma_share),
+            (None, None)
+        );
+    }
+
+    #[test]
+    fn the_final_error_is_judged_against_the_runs_own_uncertainty() {
+        let mut rows = vec![
+            row("a", true, 0.05),
+            row("a", true, 0.2),
+            row("a", false, 0.4),
+            row("a", true, 0.1),
+        ];
+        // 0.05 within 0.1, 0.2 beyond 0.1, 0.4 within 0.5; the last run reports none.
+        rows[0].final_position_sigma_m = Some(0.1);
+        rows[1].final_position_sigma_m = Some(0.1);
+        rows[2].final_position_sigma_m = Some(0.5);
+        let a = aggregate(&rows);
+        assert!((a[0].within_final_sigma_share.unwrap() - 2.0 / 3.0).abs() < 1e-12);
+        assert!((a[0].median_final_sigma_m.unwrap() - 0.1).abs() < 1e-12);
+        // An error equal to the uncertainty lies within it.
+        rows[1].final_position_sigma_m = Some(0.2);
+        assert_eq!(aggregate(&rows)[0].within_final_sigma_share, Some(1.0));
     }
 
     #[test]

@@ -84,6 +84,11 @@ pub struct Aggregate {
     pub median_final_error_m: f64,
     /// 90th percentile of the final localisation error, metres.
     pub p90_final_error_m: f64,
+    /// Median of the navigator's final position uncertainty, metres (`null` if no run has one).
+    pub median_final_sigma_m: Option<f64>,
+    /// Share of the runs with an error and an uncertainty whose final error lies within it
+    /// (`null` if none has both).
+    pub within_final_sigma_share: Option<f64>,
     /// Median ATE RMSE, metres.
     pub median_ate_rmse_m: f64,
     /// Median legs.
@@ -120,6 +125,14 @@ pub fn aggregate(rows: &[BatchRow]) -> Vec<Aggregate> {
             let mut legs: Vec<f64> = sel.iter().map(|r| r.legs as f64).collect();
             let mut cpu: Vec<f64> = sel.iter().map(|r| r.cpu_time_s).collect();
             let spls: Vec<f64> = sel.iter().filter_map(|r| r.spl).collect();
+            let mut sigmas: Vec<f64> = sel
+                .iter()
+                .filter_map(|r| r.final_position_sigma_m)
+                .collect();
+            let judged: Vec<bool> = sel
+                .iter()
+                .filter_map(|r| Some(r.final_position_error_m? <= r.final_position_sigma_m?))
+                .collect();
             let mut reasons = std::collections::BTreeMap::new();
             for r in &sel {
                 *reasons.entry(r.reason.to_string()).or_insert(0) += 1;
@@ -137,6 +150,9 @@ pub fn aggregate(rows: &[BatchRow]) -> Vec<Aggregate> {
                 runs_with_collision: sel.iter().filter(|r| r.collisions > 0).count(),
                 median_final_error_m: median(&mut fe),
                 p90_final_error_m: percentile(&mut fe, 0.9),
+                median_final_sigma_m: (!sigmas.is_empty()).then(|| median(&mut sigmas)),
+                within_final_sigma_share: (!judged.is_empty())
+                    .then(|| judged.iter().filter(|&&w| w).count() as f64 / judged.len() as f64),
                 median_ate_rmse_m: median(&mut ate),
                 median_legs: median(&mut legs),
                 median_cpu_time_s: median(&mut cpu),
