@@ -148,18 +148,23 @@ fn the_walls_shrink_the_heading_uncertainty_as_a_kalman_filter_does() {
     );
 }
 
+/// The final position errors of the walls' run on a base turning `turn_scale` of every
+/// command, without and with `rectilinear_moves_position`, metres; both runs must arrive.
+fn position_errors(turn_scale: f64) -> (f64, f64) {
+    let [off, on] = [false, true].map(|moves| {
+        let (reason, est, truth) = run_with(true, moves, turn_scale);
+        assert_eq!(reason, Reason::Reached, "moves_position = {moves}");
+        est.position().distance_m(&truth.position())
+    });
+    (off, on)
+}
+
 #[test]
 fn a_corrected_heading_moves_the_position_its_error_displaced() {
     // The base turns 4 % short: every leg after a turn runs off the estimate's heading until
     // the walls square it up, and its end lies to the side by the leg times that error.
     // Moving the position with the heading takes part of that off.
-    let (_, est0, truth0) = run_with(true, false, 0.96);
-    let (reason, est, truth) = run_with(true, true, 0.96);
-    assert_eq!(reason, Reason::Reached);
-    let (e0, e) = (
-        est0.position().distance_m(&truth0.position()),
-        est.position().distance_m(&truth.position()),
-    );
+    let (e0, e) = position_errors(0.96);
     assert!(e < 0.8 * e0, "{e:.3} m against {e0:.3} m");
 }
 
@@ -167,12 +172,6 @@ fn a_corrected_heading_moves_the_position_its_error_displaced() {
 fn an_exact_base_keeps_its_position() {
     // Nothing to correct: the walls' own error turns the heading by hundredths of a degree,
     // which move the position by well under a millimetre over the run.
-    let (_, est0, truth0) = run_with(true, false, 1.0);
-    let (reason, est, truth) = run_with(true, true, 1.0);
-    assert_eq!(reason, Reason::Reached);
-    let (e0, e) = (
-        est0.position().distance_m(&truth0.position()),
-        est.position().distance_m(&truth.position()),
-    );
+    let (e0, e) = position_errors(1.0);
     assert!((e - e0).abs() < 0.001, "{e:.4} m against {e0:.4} m");
 }
