@@ -159,9 +159,8 @@ pub struct Navigator {
     sigma_heading_rad: f64,
     /// The estimate's position uncertainty (one standard deviation), metres.
     sigma_position_m: f64,
-    /// Covariance of the estimate's position (x, y) with its heading, metre radians: what
-    /// the legs driven on an uncertain heading carry of it.
-    cov_position_heading: [f64; 2],
+    /// Covariances of the estimate's position with its heading and with the axes.
+    position_cov: PositionCov,
     /// Leg ends kept for `[localiser] revisit`.
     revisits: Revisits,
     /// The leg of the last revisit correction (0: none yet).
@@ -185,6 +184,45 @@ struct Axes {
     var_rad2: f64,
     /// Its covariance with the estimate's heading, rad^2.
     cov_heading_rad2: f64,
+}
+
+impl Axes {
+    /// Their covariance with a heading of variance `p_hh`, held to what the two variances
+    /// allow (revisits and SLAM shrink the heading's variance alone), rad^2.
+    fn heading_cov_rad2(&self, p_hh: f64) -> f64 {
+        let bound = (p_hh * self.var_rad2).sqrt();
+        self.cov_heading_rad2.clamp(-bound, bound)
+    }
+}
+
+/// Covariances of the estimate's position (x, y) with its heading and with the building's
+/// axes, metre radians: what the legs driven on an uncertain heading carry of it.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+struct PositionCov {
+    heading: [f64; 2],
+    axes: [f64; 2],
+}
+
+impl PositionCov {
+    /// A leg displaced the position by (`dx`, `dy`): its end moves by (-dy, dx) per radian
+    /// of heading error, with the heading's variance `p_hh` and covariance `p_ha` with the axes.
+    fn leg(&mut self, dx: f64, dy: f64, p_hh: f64, p_ha: f64) {
+        for (i, j) in [-dy, dx].into_iter().enumerate() {
+            self.heading[i] += j * p_hh;
+            self.axes[i] += j * p_ha;
+        }
+    }
+
+    /// The walls' Kalman update (innovation axes less heading, variance `s`): the position's
+    /// gain per radian of innovation; the covariances become those after the update.
+    fn wall_update(&mut self, p_hh: f64, p_ha: f64, p_aa: f64, s: f64) -> [f64; 2] {
+        let gain = [0, 1].map(|i| (self.axes[i] - self.heading[i]) / s);
+        for (i, k) in gain.iter().enumerate() {
+            self.heading[i] -= k * (p_ha - p_hh);
+            self.axes[i] -= k * (p_aa - p_ha);
+        }
+        gain
+    }
 }
 
 impl Navigator {
@@ -259,7 +297,7 @@ impl Navigator {
             slam_leg_pose: None,
             sigma_heading_rad: 0.0,
             sigma_position_m: 0.0,
-            cov_position_heading: [0.0; 2],
+            position_cov: PositionCov::default(),
             revisits: Revisits::default(),
             last_revisit_leg: 0,
             axes: None,
@@ -1105,14 +1143,14 @@ impl Navigator {
         };
         self.sigma_position_m =
             self.sigma_position_m.hypot(share * driven) + driven * self.sigma_heading_rad;
-        // The leg's end moves by (-dy, dx) per radian of heading error at its origin.
-        let (dx, dy) = (
+        let p_hh = self.sigma_heading_rad.powi(2);
+        let p_ha = self.axes.map_or(0.0, |a| a.heading_cov_rad2(p_hh));
+        self.position_cov.leg(
             self.estimate.x_m - drive.origin.x_m,
             self.estimate.y_m - drive.origin.y_m,
+            p_hh,
+            p_ha,
         );
-        let p_hh = self.sigma_heading_rad.powi(2);
-        self.cov_position_heading[0] -= dy * p_hh;
-        self.cov_position_heading[1] += dx * p_hh;
         self.square_up(&drive.last_scan);
         if self.params.localiser.revisit && drive.commanded_m > 0.0 {
             self.revisit(&drive.last_scan);
@@ -1176,14 +1214,13 @@ impl Navigator {
                 var_rad2: p_hh + r,
                 cov_heading_rad2: p_hh,
             });
+            // The axes are the heading plus the walls' own error.
+            self.position_cov.axes = self.position_cov.heading;
             return;
         };
         let off = localiser::wrap_quarter_rad(seen - axes.angle_rad);
-        // Other corrections (revisits, SLAM) shrink the heading's variance alone: the
-        // covariance is held to what the two variances allow.
         let p_aa = axes.var_rad2;
-        let bound = (p_hh * p_aa).sqrt();
-        let p_ha = axes.cov_heading_rad2.clamp(-bound, bound);
+        let p_ha = axes.heading_cov_rad2(p_hh);
         let innovation_var = p_hh + p_aa - 2.0 * p_ha + r;
         let gate = (l.rectilinear_gate_sigmas * innovation_var.sqrt())
             .min(l.rectilinear_max_deg.to_radians());
@@ -1208,36 +1245,21 @@ impl Navigator {
             scan_types::normalize_angle_rad(self.estimate.theta_rad + k_h * off);
         // (I - K H) P with H = [-1, 1].
         let new_hh = p_hh + k_h * (p_hh - p_ha);
-        if l.rectilinear_moves_position && p_hh > 0.0 {
-            // The position's gain, with the position correlated with the axes only through
-            // the heading: P_ph / P_hh times the heading's correction; its covariance with
-            // the heading shrinks as the heading's variance does.
-            let [c_x, c_y] = self.cov_position_heading;
-            self.estimate.x_m += c_x / p_hh * k_h * off;
-            self.estimate.y_m += c_y / p_hh * k_h * off;
-            let shrink = new_hh.max(0.0) / p_hh;
-            self.cov_position_heading = [c_x * shrink, c_y * shrink];
-        }
         let new_ha = p_ha + k_h * (p_ha - p_aa);
         let new_aa = p_aa - k_a * (p_aa - p_ha);
+        let gain = self
+            .position_cov
+            .wall_update(p_hh, p_ha, p_aa, innovation_var);
+        if l.rectilinear_moves_position {
+            self.estimate.x_m += gain[0] * off;
+            self.estimate.y_m += gain[1] * off;
+        }
         self.sigma_heading_rad = new_hh.max(0.0).sqrt();
         self.axes = Some(Axes {
             angle_rad: localiser::wrap_quarter_rad(axes.angle_rad + k_a * off),
             var_rad2: new_aa.max(0.0),
             cov_heading_rad2: new_ha,
         });
-    }
-
-    /// Sets the heading's uncertainty, its covariance with the position shrinking with it.
-    fn scale_heading_sigma(&mut self, sigma_rad: f64) {
-        let old = self.sigma_heading_rad;
-        let shrink = if old > 0.0 {
-            (sigma_rad / old).powi(2).min(1.0)
-        } else {
-            0.0
-        };
-        self.cov_position_heading = self.cov_position_heading.map(|c| c * shrink);
-        self.sigma_heading_rad = sigma_rad;
     }
 
     /// `[localiser] revisit`: corrects the estimate by the earlier leg ends near it, and keeps
@@ -1259,7 +1281,9 @@ impl Navigator {
                 .distribute(from, self.legs, self.estimate, c.pose);
             self.estimate = c.pose;
             self.sigma_position_m = c.sigma_m;
-            self.scale_heading_sigma(c.sigma_heading_rad);
+            self.sigma_heading_rad = c.sigma_heading_rad;
+            // The position now rests on the matched leg end, not on the legs since.
+            self.position_cov = PositionCov::default();
             self.last_revisit_leg = self.legs;
             self.grid = self
                 .revisits
@@ -1411,5 +1435,47 @@ impl Navigator {
                 .filter(|(_, p)| p.range_m() <= reach)
                 .map(|(_, p)| estimate.transform_point(p)),
         );
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::PositionCov;
+
+    #[test]
+    fn the_position_gain_follows_the_kalman_filter_by_hand() {
+        // Heading and axes in units of the first turn's variance (q = 1); walls of variance
+        // r. At the start the heading is exact and the walls set the axes: p_aa = r, no
+        // covariance. A turn makes p_hh = 1; the walls' update (S = 1 + 2r) leaves
+        // h1 = 2r / (1 + 2r), c1 = r / (1 + 2r) with the axes, a1 = r (1 + r) / (1 + 2r).
+        let r: f64 = 0.5625;
+        let (h1, c1, a1) = (
+            2.0 * r / (1.0 + 2.0 * r),
+            r / (1.0 + 2.0 * r),
+            r * (1.0 + r) / (1.0 + 2.0 * r),
+        );
+        let mut cov = PositionCov::default();
+        // Nothing driven yet: the first update moves no position.
+        assert_eq!(cov.wall_update(1.0, 0.0, r, 1.0 + 2.0 * r), [0.0, 0.0]);
+        // A 2 m leg along +x: its end moves along +y by 2 per unit of heading error.
+        cov.leg(2.0, 0.0, h1, c1);
+        assert_eq!(cov.heading, [0.0, 2.0 * h1]);
+        assert_eq!(cov.axes, [0.0, 2.0 * c1]);
+        // The next turn adds 1 to the heading's variance alone; the walls then give the
+        // position the gain (P_pa - P_ph) / S = 2 (c1 - h1) / S = -2 c1 / S along y.
+        let p_hh = h1 + 1.0;
+        let s = p_hh + a1 - 2.0 * c1 + r;
+        let gain = cov.wall_update(p_hh, c1, a1, s);
+        let k_y = -2.0 * c1 / s;
+        assert_eq!(gain[0], 0.0);
+        assert!((gain[1] - k_y).abs() < 1e-12, "{} vs {k_y}", gain[1]);
+        // Per radian the heading moves by k_h = (c1 - p_hh) / S: the position by
+        // 2 c1 / (p_hh - c1) = 0.4186 m per radian, not the 2 h1 / p_hh = 0.6923 m of a
+        // position correlated with the axes only through the heading.
+        let k_h = (c1 - p_hh) / s;
+        assert!((gain[1] / k_h - 0.4186).abs() < 1e-4, "{}", gain[1] / k_h);
+        // (I - K H) P: the covariances after the update.
+        assert!((cov.heading[1] - (2.0 * h1 - k_y * (c1 - p_hh))).abs() < 1e-12);
+        assert!((cov.axes[1] - (2.0 * c1 - k_y * (a1 - c1))).abs() < 1e-12);
     }
 }

@@ -339,9 +339,7 @@ pub struct LocaliserParams {
     /// Share of a scan's straight-wall fits that must run along one pair of axes (0..1).
     #[serde(default = "default_rectilinear_min_share")]
     pub rectilinear_min_share: f64,
-    /// A heading corrected by the walls also moves the position, by the correlation the legs
-    /// driven on the uncertain heading built between the two. Absent from a stored
-    /// configuration, it is off (as the runs recorded before it).
+    /// A heading corrected by the walls also moves the position it displaced (off when absent).
     #[serde(default)]
     pub rectilinear_moves_position: bool,
 }

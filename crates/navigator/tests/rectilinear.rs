@@ -165,7 +165,7 @@ fn a_corrected_heading_moves_the_position_its_error_displaced() {
     // the walls square it up, and its end lies to the side by the leg times that error.
     // Moving the position with the heading takes part of that off.
     let (e0, e) = position_errors(0.96);
-    assert!(e < 0.8 * e0, "{e:.3} m against {e0:.3} m");
+    assert!(e < 0.9 * e0, "{e:.3} m against {e0:.3} m");
 }
 
 #[test]

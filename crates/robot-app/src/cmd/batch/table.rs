@@ -84,10 +84,9 @@ pub struct Aggregate {
     pub median_final_error_m: f64,
     /// 90th percentile of the final localisation error, metres.
     pub p90_final_error_m: f64,
-    /// Median of the navigator's final position uncertainty, metres (`null` if no run has one).
+    /// Median of the navigator's final position uncertainty, metres.
     pub median_final_sigma_m: Option<f64>,
-    /// Share of the runs with an error and an uncertainty whose final error lies within it
-    /// (`null` if none has both).
+    /// Share of the runs with both whose final error lies within their final uncertainty.
     pub within_final_sigma_share: Option<f64>,
     /// Median ATE RMSE, metres.
     pub median_ate_rmse_m: f64,
