@@ -1474,8 +1474,9 @@ mod tests {
         // position correlated with the axes only through the heading.
         let k_h = (c1 - p_hh) / s;
         assert!((gain[1] / k_h - 0.4186).abs() < 1e-4, "{}", gain[1] / k_h);
-        // (I - K H) P: the covariances after the update.
-        assert!((cov.heading[1] - (2.0 * h1 - k_y * (c1 - p_hh))).abs() < 1e-12);
-        assert!((cov.axes[1] - (2.0 * c1 - k_y * (a1 - c1))).abs() < 1e-12);
+        // (I - K H) P: with r = 9/16, h1 = 9/17, c1 = 9/34, a1 = 225/544 and p_hh = 26/17,
+        // the covariances after the update are 0.72 (heading) and 0.569302 (axes).
+        assert!((cov.heading[1] - 0.72).abs() < 1e-6, "{}", cov.heading[1]);
+        assert!((cov.axes[1] - 0.569302).abs() < 1e-6, "{}", cov.axes[1]);
     }
 }
