@@ -7,6 +7,8 @@ use scan_types::{Pose2, ScanGeometry, WorldPoint};
 
 #[path = "common/base.rs"]
 mod base;
+#[path = "common/stored.rs"]
+mod stored;
 
 /// The target 3 m to the left of the start, in a 6 m x 7 m room whose walls measure every turn.
 const GOAL: (f64, f64) = (0.0, 3.0);
@@ -52,13 +54,8 @@ fn an_arrival_beside_the_target_drives_onto_it() {
 
 #[test]
 fn a_stored_configuration_without_the_key_makes_no_approach() {
-    let mut v = serde_json::to_value(Params::goalseek()).unwrap();
-    let navigator = v["navigator"].as_object_mut().unwrap();
-    assert_eq!(
-        navigator.remove("final_approach_m"),
-        Some(serde_json::json!(0.05))
-    );
-    let old: Params = serde_json::from_value(v).unwrap();
+    let (old, removed) = stored::without("navigator", &["final_approach_m"]);
+    assert_eq!(removed, [serde_json::json!(0.05)]);
     assert_eq!(old.navigator.final_approach_m, 0.0);
     assert_eq!(Params::paper().navigator.final_approach_m, 0.0);
     let mut bad = Params::goalseek();

@@ -9,6 +9,8 @@ use scan_types::{Pose2, ScanGeometry, WorldPoint};
 mod base;
 #[path = "common/room.rs"]
 mod room;
+#[path = "common/stored.rs"]
+mod stored;
 
 /// Runs from (1, 1, 0) to (7, 4) in the hand-built room on a base that turns `turn_scale` of
 /// every command, with the heading from the commands alone (no scan measures a turn); returns
@@ -70,19 +72,15 @@ fn an_exact_base_keeps_its_heading() {
 
 #[test]
 fn a_stored_configuration_without_the_key_keeps_it_off() {
-    let mut v = serde_json::to_value(Params::goalseek()).unwrap();
-    let localiser = v["localiser"].as_object_mut().unwrap();
+    let (old, removed) =
+        stored::without("localiser", &["rectilinear", "rectilinear_moves_position"]);
     assert_eq!(
-        localiser.remove("rectilinear"),
-        Some(serde_json::json!(true))
+        removed,
+        [
+            serde_json::json!(true),
+            serde_json::json!(Params::goalseek().localiser.rectilinear_moves_position)
+        ]
     );
-    assert_eq!(
-        localiser.remove("rectilinear_moves_position"),
-        Some(serde_json::json!(
-            Params::goalseek().localiser.rectilinear_moves_position
-        ))
-    );
-    let old: Params = serde_json::from_value(v).unwrap();
     assert!(!old.localiser.rectilinear);
     assert!(!old.localiser.rectilinear_moves_position);
     assert!(!Params::paper().localiser.rectilinear);

@@ -8,6 +8,8 @@ use scan_types::testkit::{boxed, scan_at};
 mod base;
 #[path = "common/room.rs"]
 mod room;
+#[path = "common/stored.rs"]
+mod stored;
 use room::room;
 use scan_types::{Pose2, ScanGeometry, WorldPoint};
 
@@ -96,15 +98,8 @@ fn slam_window_is_validated() {
 #[test]
 fn a_stored_configuration_without_the_line_criterion_keeps_the_old_one() {
     // Recordings made before `slam_line_scatter` re-run with the offline front end's 0.1.
-    let mut v = serde_json::to_value(Params::goalseek()).unwrap();
-    let localiser = v["localiser"].as_object_mut().unwrap();
-    assert_eq!(
-        localiser
-            .remove("slam_line_scatter")
-            .and_then(|x| x.as_f64()),
-        Some(0.03)
-    );
-    let old: Params = serde_json::from_value(v).unwrap();
+    let (old, removed) = stored::without("localiser", &["slam_line_scatter"]);
+    assert_eq!(removed[0].as_f64(), Some(0.03));
     assert_eq!(old.localiser.slam_line_scatter, 0.1);
     assert_eq!(old.localiser.slam_front_end().icp_line_scatter, 0.1);
 }
