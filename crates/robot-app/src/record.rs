@@ -80,18 +80,6 @@ impl Recorder {
         }
     }
 
-    /// Records a scan of a run on a real robot with the loop's estimate (kept by the ROS 2
-    /// profile only; goalseek's recording keeps the bare scans of a real run).
-    pub fn write_estimated(&mut self, scan: &Scan, estimate: Pose2) -> Result<(), LogError> {
-        match self {
-            Recorder::Foxglove(r) => r.write(scan),
-            Recorder::Ros2(r) => {
-                let geometry = scan_geometry(r.path(), r.geometry())?;
-                r.record_scan(&geometry, scan, None, Some(estimate))
-            }
-        }
-    }
-
     /// Records one scan with its geometry and, where known, the true and estimated poses.
     pub fn record_scan(
         &mut self,
@@ -143,13 +131,6 @@ impl Recorder {
             Recorder::Ros2(r) => r.finish(),
         }
     }
-}
-
-/// The geometry a recorder was created with.
-fn scan_geometry(path: &Path, geometry: Option<ScanGeometry>) -> Result<ScanGeometry, LogError> {
-    geometry.ok_or_else(|| LogError::NoGeometry {
-        path: path.to_path_buf(),
-    })
 }
 
 /// The grid as ROS map_server publishes its `map.yaml` (`mode: trinary`): occupied 100, free 0,

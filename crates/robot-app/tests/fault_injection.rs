@@ -219,6 +219,9 @@ fn no_fault_reaches_the_goal_and_maps_the_run() {
         serde_json::from_slice(&std::fs::read(run.join("slam/slam.json")).unwrap()).unwrap();
     assert_eq!(report["scans"].as_u64(), Some(recorded_scans(&run)));
     assert_eq!(report["placed"], report["scans"]);
+    // Each search is centred on the navigator's own estimate, recorded with every scan.
+    assert_eq!(report["motion_prior"], serde_json::json!(true));
+    assert!(report["evaluation"].is_object());
     assert!(
         run.join("slam/map.pgm")
             .metadata()

@@ -85,7 +85,7 @@ pub fn run(mut args: RunArgs) -> anyhow::Result<()> {
     let mut hook = |scan: &Scan, estimate: &Pose2| {
         if let Some(r) = recorder.as_mut()
             && record_error.is_none()
-            && let Err(e) = r.write_estimated(scan, *estimate)
+            && let Err(e) = r.record_scan(&geometry, scan, None, Some(*estimate))
         {
             record_error = Some(e.to_string());
         }
