@@ -2,7 +2,7 @@
 
 use std::process::ExitCode;
 
-use clap::{ArgAction, Parser, Subcommand};
+use clap::{ArgAction, CommandFactory, FromArgMatches, Parser, Subcommand};
 use robot_app::cmd;
 
 /// Goal seeking, localisation and mapping with nothing but a 2D laser range finder.
@@ -51,7 +51,12 @@ enum Command {
 }
 
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    // A negative number is a value (`--max-range -5`), so that the option's own check names it.
+    let command = Cli::command().mut_subcommands(|c| {
+        c.allow_negative_numbers(true)
+            .mut_subcommands(|c| c.allow_negative_numbers(true))
+    });
+    let cli = Cli::from_arg_matches(&command.get_matches()).unwrap_or_else(|e| e.exit());
     robot_app::logging::init(cli.verbose, cli.quiet);
     robot_app::interrupt::install();
     let result = match cli.command {

@@ -158,6 +158,21 @@ pub fn spl(reached: bool, geodesic_m: f64, path_m: f64) -> f64 {
     geodesic_m / path_m.max(geodesic_m)
 }
 
+/// Prints a result line on stdout. A reader that has gone away (`robot-app ... | head`) is no
+/// error: the work goes on and its files are written.
+pub fn say(text: std::fmt::Arguments) {
+    use std::io::Write;
+    let _ = std::io::stdout().lock().write_fmt(text);
+}
+
+/// `println!` through [`say`].
+#[macro_export]
+macro_rules! say {
+    ($($arg:tt)*) => {
+        $crate::outputs::say(format_args!("{}\n", format_args!($($arg)*)))
+    };
+}
+
 /// Writes `bytes` to `path` atomically ([`scan_types::write_atomic`]).
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
     scan_types::write_atomic(path, bytes)

@@ -205,27 +205,24 @@ pub fn run(args: ExploreArgs) -> anyhow::Result<()> {
             .with_context(|| format!("writing {}", path.display()))?;
     }
     let pct = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{:.1} %", 100.0 * v));
-    #[allow(clippy::print_stdout)]
-    {
-        println!(
-            "{}: {} frontiers tried ({} reached), {} legs, coverage {}, map accuracy {}, collisions {}, final localisation error {}, outputs in {}",
-            match summary.end {
-                ExploreEnd::Explored => "explored",
-                ExploreEnd::GoalLimit => "goal limit",
-                ExploreEnd::Failed => "failed",
-            },
-            summary.goals_tried,
-            summary.goals_reached,
-            summary.legs,
-            pct(summary.coverage_share),
-            pct(summary.map_accuracy_share),
-            summary.collisions,
-            summary
-                .final_position_error_m
-                .map_or("-".to_string(), |e| format!("{e:.3} m")),
-            args.options.out.display()
-        );
-    }
+    crate::say!(
+        "{}: {} frontiers tried ({} reached), {} legs, coverage {}, map accuracy {}, collisions {}, final localisation error {}, outputs in {}",
+        match summary.end {
+            ExploreEnd::Explored => "explored",
+            ExploreEnd::GoalLimit => "goal limit",
+            ExploreEnd::Failed => "failed",
+        },
+        summary.goals_tried,
+        summary.goals_reached,
+        summary.legs,
+        pct(summary.coverage_share),
+        pct(summary.map_accuracy_share),
+        summary.collisions,
+        summary
+            .final_position_error_m
+            .map_or("-".to_string(), |e| format!("{e:.3} m")),
+        args.options.out.display()
+    );
     // What was recorded is mapped even when the recording broke off.
     let mapped = args.options.write_slam_map();
     if let (Ok(Some(slam_run)), Some((world, _)), Some((radius_m, start))) =
@@ -242,14 +239,11 @@ pub fn run(args: ExploreArgs) -> anyhow::Result<()> {
         summary.slam_map_coverage_share = coverage;
         summary.slam_map_accuracy_share = accuracy;
         write_summary(&args.options.out, summary)?;
-        #[allow(clippy::print_stdout)]
-        {
-            println!(
-                "--slam-map: the SLAM map placed at the true start: coverage {}, map accuracy {}",
-                pct(coverage),
-                pct(accuracy)
-            );
-        }
+        crate::say!(
+            "--slam-map: the SLAM map placed at the true start: coverage {}, map accuracy {}",
+            pct(coverage),
+            pct(accuracy)
+        );
     }
     explored.recorded?;
     let summary = &explored.summary;

@@ -89,10 +89,7 @@ pub fn run(args: ExploreArgs, seeds: &str) -> anyhow::Result<()> {
     let path = out.join("explore-batch.json");
     write_atomic(&path, text.as_bytes())?;
     print_table(&file);
-    #[allow(clippy::print_stdout)]
-    {
-        println!("explore-batch.json: {}", path.display());
-    }
+    crate::say!("explore-batch.json: {}", path.display());
     if interrupted {
         return Err(crate::interrupt::Interrupted.into());
     }
@@ -155,7 +152,6 @@ fn aggregate(runs: &[Value]) -> Aggregates {
     }
 }
 
-#[allow(clippy::print_stdout)]
 fn print_table(file: &BatchFile) {
     let pct = |v: Option<f64>| v.map_or("-".into(), |v| format!("{:.1} %", 100.0 * v));
     let at_least = |key: &str, bar: f64| {
@@ -167,11 +163,18 @@ fn print_table(file: &BatchFile) {
         }
     };
     let a = &file.aggregates;
-    println!(
+    crate::say!(
         "{:<10} {:>9} {:>9} {:>8} {:>9} {:>9} {:>8} {:>10}",
-        "map", "cov. min", "cov. med", ">= 95 %", "acc. min", "acc. med", ">= 98 %", "collisions"
+        "map",
+        "cov. min",
+        "cov. med",
+        ">= 95 %",
+        "acc. min",
+        "acc. med",
+        ">= 98 %",
+        "collisions"
     );
-    println!(
+    crate::say!(
         "{:<10} {:>9} {:>9} {:>8} {:>9} {:>9} {:>8} {:>10}",
         "own",
         pct(a.min_coverage_share),
@@ -183,7 +186,7 @@ fn print_table(file: &BatchFile) {
         a.runs_with_collision
     );
     if a.median_slam_map_accuracy_share.is_some() {
-        println!(
+        crate::say!(
             "{:<10} {:>9} {:>9} {:>8} {:>9} {:>9} {:>8} {:>10}",
             "slam",
             pct(a.min_slam_map_coverage_share),
@@ -196,7 +199,7 @@ fn print_table(file: &BatchFile) {
         );
     }
     let m = |v: Option<f64>| v.map_or("-".into(), |v| format!("{v:.3} m"));
-    println!(
+    crate::say!(
         "{} runs; final localisation error median {}, max {}",
         a.runs,
         m(a.median_final_position_error_m),

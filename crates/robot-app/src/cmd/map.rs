@@ -25,8 +25,8 @@ pub struct MapArgs {
     /// Output directory (created if missing).
     #[arg(long, default_value = ".")]
     pub out: PathBuf,
-    /// Rays are used up to this range: farther hits and no-return rays only clear cells up
-    /// to it, metres.
+    /// Rays are used up to this range, metres: farther hits and no-return rays are left out
+    /// (see --clear-no-return).
     #[arg(long, default_value_t = 20.0)]
     pub max_range: f64,
     /// Spread the log's rays evenly over this many degrees instead of the log's geometry

@@ -329,18 +329,15 @@ pub fn run(args: SimArgs) -> anyhow::Result<()> {
         "run finished; outputs in {}",
         args.options.out.display()
     );
-    #[allow(clippy::print_stdout)]
-    {
-        println!(
-            "{}: {} after {} legs, true distance to target {:.3} m, final localisation error {:.3} m, outputs in {}",
-            if s.reached { "reached" } else { "failed" },
-            s.reason,
-            s.legs,
-            s.goal_distance_m.unwrap_or(f64::NAN),
-            s.final_position_error_m.unwrap_or(f64::NAN),
-            args.options.out.display()
-        );
-    }
+    crate::say!(
+        "{}: {} after {} legs, true distance to target {:.3} m, final localisation error {:.3} m, outputs in {}",
+        if s.reached { "reached" } else { "failed" },
+        s.reason,
+        s.legs,
+        s.goal_distance_m.unwrap_or(f64::NAN),
+        s.final_position_error_m.unwrap_or(f64::NAN),
+        args.options.out.display()
+    );
     let mapped = args.options.write_slam_map().map(|_| ());
     if s.reason == Reason::Interrupted {
         return Err(crate::interrupt::Interrupted.into());

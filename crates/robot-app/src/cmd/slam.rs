@@ -51,7 +51,8 @@ pub struct SlamArgs {
     /// Map cell side, metres.
     #[arg(long, default_value_t = MAP_RESOLUTION_M)]
     pub resolution: f64,
-    /// Rays enter the map up to this range, metres.
+    /// Rays enter the map up to this range, metres: farther hits and no-return rays are left
+    /// out (the estimate uses every hit within the front end's `max_range_m`).
     #[arg(long, default_value_t = MAP_MAX_RANGE_M)]
     pub max_range: f64,
     /// Live view (the front end's poses as scans are placed; the final map at the end).
@@ -248,6 +249,20 @@ pub fn write_outputs(
         write_atomic(&dir.join("reference.tum"), tum(rows).as_bytes())?;
     }
     let grid = run.map(resolution_m, max_range_m);
+    if grid.width() > 0 {
+        write_maps(dir, run, &grid)?;
+    } else {
+        tracing::warn!(
+            "no hit lies within --max-range {max_range_m} m: map.pgm, map.yaml and map.png are not written"
+        );
+    }
+    let mut text = serde_json::to_string_pretty(&run.report)?;
+    text.push('\n');
+    write_atomic(&dir.join("slam.json"), text.as_bytes())
+}
+
+/// `map.pgm`, `map.yaml` and `map.png` (with the trajectory and the closures) of `grid`.
+fn write_maps(dir: &Path, run: &SlamRun, grid: &localiser::OccupancyGrid) -> anyhow::Result<()> {
     grid.write_map_server(dir, "map")?;
     let closures = run
         .report
@@ -266,10 +281,7 @@ pub fn write_outputs(
         &poses,
         closures,
     )?;
-    write_atomic(&dir.join("map.png"), &png)?;
-    let mut text = serde_json::to_string_pretty(&run.report)?;
-    text.push('\n');
-    write_atomic(&dir.join("slam.json"), text.as_bytes())
+    write_atomic(&dir.join("map.png"), &png)
 }
 
 /// A greyscale map image (row 0 at the top) and where it lies.
@@ -446,20 +458,21 @@ pub fn run(args: SlamArgs) -> anyhow::Result<()> {
             )
         })
     });
-    #[allow(clippy::print_stdout)]
-    {
-        println!(
-            "{}: {} of {} scans placed, {} skipped; {:.2} ms per scan (median), map consistency {:.1} %, start to end {:.2} m{closures}{eval}; outputs in {}",
-            args.log.display(),
-            r.placed,
-            r.scans,
-            r.skipped.len(),
-            r.time_per_scan_ms[0],
-            100.0 * r.map_consistency_share,
-            r.start_to_end_m,
-            args.out.display()
-        );
-    }
+    let malformed = match r.malformed_records {
+        0 => String::new(),
+        n => format!(", {n} malformed records left out"),
+    };
+    crate::say!(
+        "{}: {} of {} scans placed, {} skipped{malformed}; {:.2} ms per scan (median), map consistency {:.1} %, start to end {:.2} m{closures}{eval}; outputs in {}",
+        args.log.display(),
+        r.placed,
+        r.scans,
+        r.skipped.len(),
+        r.time_per_scan_ms[0],
+        100.0 * r.map_consistency_share,
+        r.start_to_end_m,
+        args.out.display()
+    );
     if interrupted {
         return Err(crate::interrupt::Interrupted.into());
     }

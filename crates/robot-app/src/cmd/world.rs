@@ -109,7 +109,6 @@ fn generate(a: GenerateArgs) -> anyhow::Result<()> {
     if a.count > 1 && !template.contains("{seed}") {
         bail!("--count {} needs {{seed}} in --out ({template})", a.count);
     }
-    let mut out = std::io::stdout().lock();
     for seed in a.seed..a.seed.saturating_add(a.count.max(1)) {
         // The worlds written so far are whole (each file is written atomically).
         crate::interrupt::check()?;
@@ -131,8 +130,7 @@ fn generate(a: GenerateArgs) -> anyhow::Result<()> {
         }
         let s = desc.start.unwrap_or_default();
         let t = desc.target.unwrap_or_default();
-        writeln!(
-            out,
+        crate::say!(
             "{}: seed {seed}, {} obstacles, {} m x {} m, start {:.2},{:.2},{:.1} target {:.2},{:.2}{}",
             path.display(),
             desc.obstacles.len(),
@@ -148,7 +146,7 @@ fn generate(a: GenerateArgs) -> anyhow::Result<()> {
             } else {
                 String::new()
             }
-        )?;
+        );
     }
     Ok(())
 }

@@ -123,10 +123,7 @@ pub fn run(args: BatchArgs) -> anyhow::Result<()> {
     let (rows, failed) = run_jobs(&jobs, &args)?;
     let aggs = aggregate(&rows);
     // The table is printed whatever happens next.
-    #[allow(clippy::print_stdout)]
-    {
-        print!("{}", table(&aggs));
-    }
+    crate::outputs::say(format_args!("{}", table(&aggs)));
     let file = BatchFile {
         command: std::env::args().collect::<Vec<_>>().join(" "),
         aggregates: &aggs,
@@ -135,10 +132,7 @@ pub fn run(args: BatchArgs) -> anyhow::Result<()> {
     let mut text = serde_json::to_string_pretty(&file)?;
     text.push('\n');
     write_atomic(&args.out.join("batch.json"), text.as_bytes())?;
-    #[allow(clippy::print_stdout)]
-    {
-        println!("batch.json: {}", args.out.join("batch.json").display());
-    }
+    crate::say!("batch.json: {}", args.out.join("batch.json").display());
     if let Some((n, first)) = failed {
         return Err(first.context(format!("{n} of {} runs failed; the first", jobs.len())));
     }
