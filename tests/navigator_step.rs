@@ -233,7 +233,7 @@ fn max_leg_caps_every_drive() {
     let mut params = Params::goalseek();
     params.navigator.max_legs = 3;
     let (_, drives) = noiseless(World::paper(), &params, paper_start(), paper_target());
-    // The paper's first leg drives about 1.9 m to its B.
+    // The paper's first leg drives about 2.6 m to its B.
     assert!(drives.iter().any(|&d| d > 1.0 + 1e-9), "{drives:?}");
     params.planner.max_leg_m = 1.0;
     let (_, drives) = noiseless(World::paper(), &params, paper_start(), paper_target());

@@ -70,9 +70,36 @@ pub fn from_toml_str_over(
         "method".into(),
         toml::Value::String(preset.method.to_string()),
     );
-    let params: Params = merged
-        .try_into()
-        .context("config value of the wrong type")?;
+    let params: Params = match merged.try_into() {
+        Ok(p) => p,
+        Err(e) => {
+            // A value of the right TOML type that the key does not take (an unknown name):
+            // the first one that alone breaks the preset is named with its line.
+            let base = toml::Table::try_from(&preset).context("serialising the preset")?;
+            for (section, key, value) in leaves(&user, "") {
+                let mut one = base.clone();
+                let slot = match one.get_mut(&section).and_then(toml::Value::as_table_mut) {
+                    Some(t) => t,
+                    None if section.is_empty() => &mut one,
+                    None => continue,
+                };
+                slot.insert(key.clone(), value.clone());
+                if one.try_into::<Params>().is_err() {
+                    let path = if section.is_empty() {
+                        key.clone()
+                    } else {
+                        format!("{section}.{key}")
+                    };
+                    bail!(
+                        "line {}: '{path}': {}",
+                        line_of(text, &section, &key),
+                        e.message()
+                    );
+                }
+            }
+            return Err(e).context("config value of the wrong type");
+        }
+    };
     if let Err(e) = params.validate() {
         match &e {
             navigator::NavigatorError::InvalidParam { key, .. } => {
@@ -137,6 +164,19 @@ fn merge(
         }
     }
     Ok(())
+}
+
+/// Every value the file sets that is not a table: (section, key, value).
+fn leaves(table: &toml::Table, section: &str) -> Vec<(String, String, toml::Value)> {
+    let mut out = Vec::new();
+    for (key, value) in table {
+        match value {
+            toml::Value::Table(t) if section.is_empty() => out.extend(leaves(t, key)),
+            _ if section.is_empty() && key == "method" => {}
+            v => out.push((section.to_string(), key.clone(), v.clone())),
+        }
+    }
+    out
 }
 
 /// The 1-based line where `key` is set inside table `section` ("" = top level); 0 if not found.

@@ -14,7 +14,9 @@ static REQUESTED: AtomicBool = AtomicBool::new(false);
 pub fn install() {
     let installed = ctrlc::set_handler(|| {
         if REQUESTED.swap(true, Ordering::SeqCst) {
-            tracing::warn!("already stopping: the base is being stopped and outputs written");
+            tracing::warn!(
+                "already stopping: the outputs are being written (and a base told to stop)"
+            );
         } else {
             tracing::warn!("interrupted: stopping cleanly");
         }

@@ -160,7 +160,7 @@ pub fn ros2_map(grid: &OccupancyGrid) -> Option<Ros2Map> {
 }
 
 /// Opens a log (CARMEN, BreezySLAM, goalseek MCAP), with an optional sensor preset name
-/// (`paper`, `urg-04lx`, `utm-30lx`) overriding its geometry (see [`scan_log::open_log`]).
+/// (`paper`, `urg-04lx`, `utm-30lx`, `ust-10lx`) overriding its geometry (see [`scan_log::open_log`]).
 pub fn open_log(path: &Path, sensor: Option<&str>) -> anyhow::Result<LogSource> {
     open_log_topic(path, sensor, None)
 }

@@ -334,8 +334,13 @@ mod config {
             msg.contains("tracking.gate_m") && msg.contains("line 2"),
             "{msg}"
         );
-        let e = from_toml_str("[planner]\nrule = \"astar\"\n", None).unwrap_err();
-        assert!(format!("{e:#}").contains("astar"), "{e:#}");
+        let e =
+            from_toml_str("[planner]\nwidth_window_deg = 2\nrule = \"astar\"\n", None).unwrap_err();
+        let msg = format!("{e:#}");
+        assert!(
+            msg.contains("astar") && msg.contains("'planner.rule'") && msg.contains("line 3"),
+            "{msg}"
+        );
         let e = from_toml_str("[robot]\nradius_m = -1.0\n", None).unwrap_err();
         assert!(format!("{e:#}").contains("robot.radius_m"), "{e:#}");
         let e = from_toml_str("# tuning\n[navigator]\nmin_leg_m = nan\n", None).unwrap_err();

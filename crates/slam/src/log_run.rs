@@ -51,7 +51,7 @@ pub struct SlamReport {
     pub timestamps: String,
     /// Front-end time per scan, milliseconds: median and 99th percentile.
     pub time_per_scan_ms: [f64; 2],
-    /// Front-end time for the whole log, seconds.
+    /// Wall-clock time of the estimate (reading, front end, loop closure when run), seconds.
     pub total_time_s: f64,
     /// Straight-line distance between the first and the last placed pose, metres.
     pub start_to_end_m: f64,

@@ -186,8 +186,11 @@ pub fn run(args: ExploreArgs) -> anyhow::Result<()> {
         legs_per_goal: args.legs_per_goal,
         ..ExploreParams::default()
     };
-    if params.max_goals == 0 || params.legs_per_goal == 0 {
-        bail!("--max-goals and --legs-per-goal must be at least 1");
+    if params.max_goals == 0 {
+        bail!("--max-goals 0: must be at least 1");
+    }
+    if params.legs_per_goal == 0 {
+        bail!("--legs-per-goal 0: must be at least 1");
     }
     let config = args.options.load_over(explore_defaults)?;
     let explored = match &args.port {

@@ -29,7 +29,7 @@ pub struct LandmarksArgs {
     /// A no-return gap of at most this many rays beside an edge is counted as a dropout.
     #[arg(long, default_value_t = 3)]
     pub dropout_rays: usize,
-    /// Sensor preset whose geometry replaces the log's: paper, urg-04lx, utm-30lx.
+    /// Sensor preset whose geometry replaces the log's: paper, urg-04lx, utm-30lx or ust-10lx.
     #[arg(long)]
     pub sensor: Option<String>,
     /// The laser topic to read when a bag or MCAP file holds several (e.g. /scan).

@@ -19,6 +19,9 @@ pub struct MapArgs {
     /// The laser topic to read when a bag or MCAP file holds several (e.g. /scan).
     #[arg(long, value_name = "NAME")]
     pub topic: Option<String>,
+    /// Sensor preset whose geometry replaces the log's: paper, urg-04lx, utm-30lx or ust-10lx.
+    #[arg(long, value_name = "PRESET")]
+    pub sensor: Option<String>,
     /// Cell side, metres.
     #[arg(long, default_value_t = 0.05)]
     pub resolution: f64,
@@ -45,7 +48,8 @@ pub struct MapArgs {
 /// Runs `robot-app map`.
 pub fn run(args: MapArgs) -> anyhow::Result<()> {
     super::check_map_options(args.resolution, args.max_range)?;
-    let mut source = crate::record::open_log_topic(&args.log, None, args.topic.as_deref())?;
+    let mut source =
+        crate::record::open_log_topic(&args.log, args.sensor.as_deref(), args.topic.as_deref())?;
     let mut geometry = *source.geometry();
     if let Some(deg) = args.spread_deg {
         geometry = ScanGeometry::centred(
@@ -60,6 +64,12 @@ pub fn run(args: MapArgs) -> anyhow::Result<()> {
         .posed_scans(args.pose == "true")
         .context("reading the log")?;
     crate::interrupt::check()?;
+    if scans.is_empty() && args.pose == "true" {
+        anyhow::bail!(
+            "{}: none of its {total} scans has a true pose (only a recording of a simulated run has them; --pose estimated maps the recorded estimate)",
+            args.log.display()
+        );
+    }
     if scans.is_empty() {
         anyhow::bail!(
             "{}: none of its {total} scans has a pose; 'robot-app map' needs a log with poses (e.g. a CARMEN corrected log)",
@@ -78,6 +88,12 @@ pub fn run(args: MapArgs) -> anyhow::Result<()> {
     crate::interrupt::check()?;
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("cannot create {}", args.out.display()))?;
+    anyhow::ensure!(
+        grid.width() > 0,
+        "{}: no hit lies within --max-range {} m: nothing to map",
+        args.log.display(),
+        args.max_range
+    );
     grid.write_map_server(&args.out, "map")?;
     grid.to_png(&args.out.join("map.png"))?;
     let mut out = std::io::stdout().lock();

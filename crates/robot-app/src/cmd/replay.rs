@@ -21,7 +21,7 @@ pub struct ReplayArgs {
     /// a number >= 0.
     #[arg(long, default_value_t = 1.0, value_parser = super::non_negative)]
     pub rate: f64,
-    /// Sensor preset whose geometry replaces the log's: paper, urg-04lx, utm-30lx.
+    /// Sensor preset whose geometry replaces the log's: paper, urg-04lx, utm-30lx or ust-10lx.
     #[arg(long)]
     pub sensor: Option<String>,
     /// The laser topic to read when a bag or MCAP file holds several (e.g. /scan).

@@ -43,7 +43,7 @@ pub struct ScanArgs {
     /// Robot pose for --sim: X,Y,THETA_DEG (default: the paper's start).
     #[arg(long, requires = "sim", allow_hyphen_values = true)]
     pub pose: Option<String>,
-    /// Sensor preset for --sim: paper, urg-04lx, utm-30lx.
+    /// Sensor preset for --sim: paper, urg-04lx, utm-30lx or ust-10lx.
     #[arg(long, default_value = "paper", requires = "sim")]
     pub sensor: String,
     /// Seed of the simulated laser noise.

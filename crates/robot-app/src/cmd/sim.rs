@@ -227,9 +227,17 @@ fn simulate_inner(
     let mut reason = reason;
     if reason == Reason::Reached && !reached {
         reason = Reason::FalseArrival;
-        note = format!(
-            "the estimate reached the target but the robot is {goal_distance:.2} m from it"
-        );
+        let beside = outcome.estimate.position().distance_m(&spec.goal)
+            > spec.config.navigator.goal_tolerance_m;
+        note = if beside {
+            // Stopped beside a target inside a wall's clearance: the navigator's note says where.
+            format!(
+                "{}; the robot is {goal_distance:.2} m from it",
+                outcome.note
+            )
+        } else {
+            format!("the estimate reached the target but the robot is {goal_distance:.2} m from it")
+        };
     }
     let (position_sigma_m, heading_sigma_deg) = crate::outputs::leg_sigmas(outcome);
     let summary = Summary {

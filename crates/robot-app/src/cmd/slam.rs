@@ -76,9 +76,12 @@ pub fn load_params(path: Option<&Path>) -> anyhow::Result<(FrontEndParams, LoopP
             .with_context(|| format!("config {}: [loop_closure]", p.display()))?,
         None => LoopParams::default(),
     };
-    let front: FrontEndParams = table
-        .try_into()
-        .with_context(|| format!("config {}", p.display()))?;
+    let front: FrontEndParams = table.try_into().with_context(|| {
+        format!(
+            "config {} (front-end keys at the top level, loop-closure keys in a [loop_closure] table)",
+            p.display()
+        )
+    })?;
     front
         .validate()
         .with_context(|| format!("config {}", p.display()))?;

@@ -124,8 +124,12 @@ fn generate(a: GenerateArgs) -> anyhow::Result<()> {
             .unwrap_or_default();
         match ext.as_str() {
             "toml" => desc.write_toml(&path)?,
-            "yaml" | "yml" => desc.write_map_server(&path, a.resolution)?,
-            "png" => desc.write_png(&path, a.resolution)?,
+            "yaml" | "yml" => desc
+                .write_map_server(&path, a.resolution)
+                .with_context(|| format!("--resolution {}", a.resolution))?,
+            "png" => desc
+                .write_png(&path, a.resolution)
+                .with_context(|| format!("--resolution {}", a.resolution))?,
             _ => bail!("{}: --out must end in .toml, .yaml or .png", path.display()),
         }
         let s = desc.start.unwrap_or_default();

@@ -109,6 +109,9 @@ struct BatchFile<'a> {
 
 /// Runs `robot-app batch`.
 pub fn run(args: BatchArgs) -> anyhow::Result<()> {
+    if args.random_pairs == Some(0) {
+        bail!("--random-pairs 0: must be at least 1");
+    }
     let jobs = jobs::build(&args)?;
     if jobs.is_empty() {
         bail!("nothing to run: no worlds, seeds or scenarios");
