@@ -345,3 +345,90 @@ fn a_closed_stdout_ends_a_command_quietly() {
     assert!(o.status.success(), "exit {:?}: {e}", o.status.code());
     assert!(!e.contains("Broken pipe"), "{e}");
 }
+
+/// Runs `robot-app args` with its stdout closed before it starts (a reader that has gone away).
+fn with_stdout_closed(args: &[&str]) -> Output {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_robot-app"))
+        .args(args)
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(child.stdout.take());
+    child.wait_with_output().unwrap()
+}
+
+#[test]
+fn a_closed_stdout_still_gets_every_file_written() {
+    let dir = tempfile::tempdir().unwrap();
+    let worlds = dir.path().join("w{seed}.toml");
+    let o = with_stdout_closed(&[
+        "world",
+        "generate",
+        "--count",
+        "3",
+        "--out",
+        worlds.to_str().unwrap(),
+    ]);
+    let e = stderr(&o);
+    assert!(o.status.success(), "exit {:?}: {e}", o.status.code());
+    assert!(!e.contains("panicked"), "{e}");
+    for seed in 0..3 {
+        assert!(dir.path().join(format!("w{seed}.toml")).exists(), "w{seed}");
+    }
+    let out = dir.path().join("batch");
+    let o = with_stdout_closed(&[
+        "-q",
+        "batch",
+        "--jobs",
+        "1",
+        "--seeds",
+        "0..1",
+        "--scenarios",
+        "paper",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let e = stderr(&o);
+    assert!(o.status.success(), "exit {:?}: {e}", o.status.code());
+    assert!(!e.contains("panicked"), "{e}");
+    assert!(out.join("batch.json").exists());
+}
+
+#[test]
+fn a_negative_value_is_named_by_its_option() {
+    let log = shared("data/breezyslam/exp1.dat");
+    fails_naming(
+        &["slam", "--log", &log, "--max-range", "-5"],
+        &["--max-range -5", "above 0"],
+    );
+    fails_naming(
+        &["map", "--log", &log, "--resolution", "-1"],
+        &["--resolution -1"],
+    );
+}
+
+#[test]
+fn a_slam_run_with_nothing_in_map_range_still_writes_its_report() {
+    // No URG-04LX hit lies within 0.1 m: the map is empty, the trajectory and report are not.
+    let dir = tempfile::tempdir().unwrap();
+    let log = shared("data/breezyslam/exp1.dat");
+    let o = robot_app(&[
+        "-q",
+        "slam",
+        "--log",
+        &log,
+        "--no-loop-closure",
+        "--max-range",
+        "0.1",
+        "--out",
+        dir.path().to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let report: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.path().join("slam.json")).unwrap()).unwrap();
+    assert_eq!(report["placed"].as_u64(), Some(756));
+    assert!(dir.path().join("trajectory.tum").exists());
+    assert!(!dir.path().join("map.pgm").exists());
+}
