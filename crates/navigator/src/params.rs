@@ -776,7 +776,10 @@ impl Params {
             return Err(invalid(
                 "planner.max_leg_m",
                 self.planner.max_leg_m,
-                "must be at least planner.min_travel_m",
+                &format!(
+                    "must be at least planner.min_travel_m = {}",
+                    self.planner.min_travel_m
+                ),
             ));
         }
         Ok(())

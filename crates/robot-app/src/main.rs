@@ -30,7 +30,7 @@ enum Command {
     Run(cmd::run::RunArgs),
     /// Run many simulated runs in parallel and summarise them.
     Batch(cmd::batch::BatchArgs),
-    /// Serve an emulated SCIP 2.0 Hokuyo on a pseudo-terminal.
+    /// Serve an emulated SCIP 2.0 Hokuyo on a pseudo-terminal (or over TCP with --tcp).
     Emulate(cmd::emulate::EmulateArgs),
     /// Print a Hokuyo's version, parameters and state (VV, PP, II).
     Info(cmd::info::InfoArgs),

@@ -179,6 +179,19 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
         .with_context(|| format!("cannot write {}", path.display()))
 }
 
+/// Writes `map.pgm`, `map.yaml` and `map.png` of `grid` in `dir`; a grid that holds no scan
+/// (a run stopped before its first) writes none and says so.
+pub fn write_grid(dir: &Path, grid: &localiser::OccupancyGrid) -> anyhow::Result<()> {
+    if grid.width() == 0 {
+        tracing::warn!("no scan was mapped: map.pgm, map.yaml and map.png are not written");
+        return Ok(());
+    }
+    grid.write_map_server(dir, "map")
+        .with_context(|| format!("writing map.pgm/map.yaml in {}", dir.display()))?;
+    grid.to_png(&dir.join("map.png"))
+        .with_context(|| format!("writing map.png in {}", dir.display()))
+}
+
 /// Writes `summary.json` in `dir`.
 pub fn write_summary(dir: &Path, summary: &Summary) -> anyhow::Result<()> {
     let mut text = serde_json::to_string_pretty(summary)?;

@@ -213,19 +213,31 @@ fn read_plain_csv(
         });
     }
     let n = rows.len();
+    let uneven = |i: usize, b: f64, lineno: usize| {
+        csv_error(
+            file,
+            lineno,
+            format!(
+                "bearing of ray {i} ({b} rad) is not evenly spaced: the geometry cannot be read from the bearings"
+            ),
+            None,
+        )
+    };
+    // The first step off the median step names its row, wherever it lies.
+    let mut steps: Vec<f64> = rows.windows(2).map(|w| w[1].0 - w[0].0).collect();
+    steps.sort_by(f64::total_cmp);
+    let step = steps[steps.len() / 2];
+    for (i, w) in rows.windows(2).enumerate() {
+        if !((w[1].0 - w[0].0 - step).abs() <= SPACING_TOLERANCE * step.abs()) {
+            return Err(uneven(i + 1, w[1].0, w[1].3));
+        }
+    }
     let first = rows[0].0;
     let increment = (rows[n - 1].0 - first) / (n - 1) as f64;
     for (i, &(b, _, _, lineno)) in rows.iter().enumerate() {
         let off = (b - (first + i as f64 * increment)).abs();
         if !(increment != 0.0 && off <= SPACING_TOLERANCE * increment.abs()) {
-            return Err(csv_error(
-                file,
-                lineno,
-                format!(
-                    "bearing of ray {i} ({b} rad) is not evenly spaced: the geometry cannot be read from the bearings"
-                ),
-                None,
-            ));
+            return Err(uneven(i, b, lineno));
         }
     }
     let max_r = rows
@@ -420,6 +432,17 @@ mod tests {
         let e = read_scan_csv("0,0.0,1\n1,0.1,1\n2,0.5,1\n".as_bytes(), "bad.csv").unwrap_err();
         assert!(
             e.to_string().contains("bad.csv") && e.to_string().contains("evenly"),
+            "{e}"
+        );
+        // Nine rays 0.1 rad apart and a tenth 0.15 rad on: the tenth row (line 10) is named.
+        let mut text = String::new();
+        for i in 0..9 {
+            text += &format!("{i},{},1\n", 0.1 * i as f64);
+        }
+        text += "9,0.95,1\n";
+        let e = read_scan_csv(text.as_bytes(), "last.csv").unwrap_err();
+        assert!(
+            e.to_string().contains("last.csv:10") && e.to_string().contains("ray 9"),
             "{e}"
         );
     }

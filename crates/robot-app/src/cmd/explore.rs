@@ -584,11 +584,7 @@ fn write_outputs(
     std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
     write_summary(dir, summary)?;
     scan_log::write_trajectory(dir, &run.log)?;
-    let grid = &run.exploration.outcome.grid;
-    grid.write_map_server(dir, "map")
-        .with_context(|| format!("writing map.pgm/map.yaml in {}", dir.display()))?;
-    grid.to_png(&dir.join("map.png"))
-        .with_context(|| format!("writing map.png in {}", dir.display()))?;
+    crate::outputs::write_grid(dir, &run.exploration.outcome.grid)?;
     let seed = summary
         .seed
         .map_or(String::new(), |s| format!(", seed {s}"));

@@ -169,12 +169,7 @@ fn run_loop<W: Write>(args: &ReplayArgs, out: &mut W) -> anyhow::Result<()> {
     if let Some(dir) = &args.out {
         std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
         scan_log::write_trajectory(dir, log)?;
-        o.grid
-            .write_map_server(dir, "map")
-            .with_context(|| format!("writing map.pgm/map.yaml in {}", dir.display()))?;
-        o.grid
-            .to_png(&dir.join("map.png"))
-            .with_context(|| format!("writing map.png in {}", dir.display()))?;
+        crate::outputs::write_grid(dir, &o.grid)?;
     }
     let compared = compare_legs(&args.file, &log.leg_summaries(), o.legs_driven, out);
     out.flush()?;

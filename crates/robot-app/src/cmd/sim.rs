@@ -278,14 +278,7 @@ pub fn write_outputs(dir: &Path, run: &SimRun, title: &str) -> anyhow::Result<()
     std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
     write_summary(dir, &run.summary)?;
     write_trajectory(dir, &run.log)?;
-    run.outcome
-        .grid
-        .write_map_server(dir, "map")
-        .with_context(|| format!("writing map.pgm/map.yaml in {}", dir.display()))?;
-    run.outcome
-        .grid
-        .to_png(&dir.join("map.png"))
-        .with_context(|| format!("writing map.png in {}", dir.display()))?;
+    crate::outputs::write_grid(dir, &run.outcome.grid)?;
     crate::plot::write_plots(dir, &run.log, title)
 }
 

@@ -162,6 +162,22 @@ fn info(a: InfoArgs) -> anyhow::Result<()> {
     };
     let (lo, hi) = world.bounds();
     let (start, target) = sim_laser::file_scenario(a.path.as_deref().map(Path::new))?;
+    // Only a TOML world stores a scenario; any other falls back to the paper's.
+    let stored = match a.path.as_deref().map(Path::new) {
+        None => (true, true),
+        Some(p) if p.extension().is_some_and(|e| e == "toml") => {
+            let d = sim_laser::read_description(p)?;
+            (d.start.is_some(), d.target.is_some())
+        }
+        Some(_) => (false, false),
+    };
+    let fallback = |stored: bool| {
+        if stored {
+            ""
+        } else {
+            " (none stored: the paper's)"
+        }
+    };
     let mut out = std::io::stdout().lock();
     writeln!(out, "world: {}", world.name())?;
     writeln!(
@@ -175,12 +191,14 @@ fn info(a: InfoArgs) -> anyhow::Result<()> {
     writeln!(out, "vector obstacles: {}", world.obstacle_count())?;
     writeln!(
         out,
-        "start: {:.3},{:.3},{:.2}  target: {:.3},{:.3}",
+        "start: {:.3},{:.3},{:.2}{}  target: {:.3},{:.3}{}",
         start.x_m,
         start.y_m,
         start.theta_rad.to_degrees(),
+        fallback(stored.0),
         target.x_m(),
-        target.y_m()
+        target.y_m(),
+        fallback(stored.1)
     )?;
     Ok(())
 }
