@@ -84,7 +84,7 @@ pub fn from_toml_str_over(
                     None => continue,
                 };
                 slot.insert(key.clone(), value.clone());
-                if one.try_into::<Params>().is_err() {
+                if let Err(own) = one.try_into::<Params>() {
                     let path = if section.is_empty() {
                         key.clone()
                     } else {
@@ -93,7 +93,7 @@ pub fn from_toml_str_over(
                     bail!(
                         "line {}: '{path}': {}",
                         line_of(text, &section, &key),
-                        e.message()
+                        own.message()
                     );
                 }
             }

@@ -162,7 +162,11 @@ pub fn spl(reached: bool, geodesic_m: f64, path_m: f64) -> f64 {
 /// error: the work goes on and its files are written.
 pub fn say(text: std::fmt::Arguments) {
     use std::io::Write;
-    let _ = std::io::stdout().lock().write_fmt(text);
+    if let Err(e) = std::io::stdout().lock().write_fmt(text)
+        && e.kind() != std::io::ErrorKind::BrokenPipe
+    {
+        tracing::error!("cannot write to stdout: {e}");
+    }
 }
 
 /// `println!` through [`say`].
@@ -184,12 +188,27 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
 pub fn write_grid(dir: &Path, grid: &localiser::OccupancyGrid) -> anyhow::Result<()> {
     if grid.width() == 0 {
         tracing::warn!("no scan was mapped: map.pgm, map.yaml and map.png are not written");
-        return Ok(());
+        return remove_maps(dir);
     }
     grid.write_map_server(dir, "map")
         .with_context(|| format!("writing map.pgm/map.yaml in {}", dir.display()))?;
     grid.to_png(&dir.join("map.png"))
         .with_context(|| format!("writing map.png in {}", dir.display()))
+}
+
+/// Removes an earlier run's `map.pgm`, `map.yaml` and `map.png` from `dir`, so that none lies
+/// beside outputs it does not belong to.
+pub fn remove_maps(dir: &Path) -> anyhow::Result<()> {
+    for name in ["map.pgm", "map.yaml", "map.png"] {
+        let path = dir.join(name);
+        match std::fs::remove_file(&path) {
+            Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
+                return Err(e).with_context(|| format!("cannot remove {}", path.display()));
+            }
+            _ => {}
+        }
+    }
+    Ok(())
 }
 
 /// Writes `summary.json` in `dir`.

@@ -432,3 +432,50 @@ fn a_slam_run_with_nothing_in_map_range_still_writes_its_report() {
     assert!(dir.path().join("trajectory.tum").exists());
     assert!(!dir.path().join("map.pgm").exists());
 }
+
+#[test]
+fn world_info_says_when_the_scenario_is_the_papers_fallback() {
+    // A generated .yaml world stores no scenario; its .toml twin stores one.
+    let dir = tempfile::tempdir().unwrap();
+    for ext in ["yaml", "toml"] {
+        let path = dir.path().join(format!("w.{ext}"));
+        let o = robot_app(&[
+            "-q",
+            "world",
+            "generate",
+            "--seed",
+            "3",
+            "--out",
+            path.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let o = robot_app(&["world", "info", path.to_str().unwrap()]);
+        let text = String::from_utf8_lossy(&o.stdout).into_owned();
+        assert!(o.status.success(), "{}", stderr(&o));
+        assert_eq!(
+            text.contains("none stored: the paper's"),
+            ext == "yaml",
+            "{ext}: {text}"
+        );
+    }
+}
+
+#[test]
+fn a_replay_whose_reader_goes_away_still_finishes_its_recording() {
+    let dir = tempfile::tempdir().unwrap();
+    let rec = dir.path().join("r.mcap");
+    let log = shared("data/breezyslam/exp1.dat");
+    let o = with_stdout_closed(&[
+        "-q",
+        "replay",
+        &log,
+        "--rate",
+        "0",
+        "--record",
+        rec.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    // A whole MCAP file ends with its magic bytes.
+    let bytes = std::fs::read(&rec).unwrap();
+    assert!(bytes.ends_with(b"\x89MCAP0\r\n"), "{} bytes", bytes.len());
+}

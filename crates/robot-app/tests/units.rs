@@ -341,6 +341,20 @@ mod config {
             msg.contains("astar") && msg.contains("'planner.rule'") && msg.contains("line 3"),
             "{msg}"
         );
+        // Two such values: the first in the file is named with its own message.
+        let e = from_toml_str(
+            "[localiser]\nheading_rule = \"sideways\"\n[planner]\nrule = \"astar\"\n",
+            None,
+        )
+        .unwrap_err();
+        let msg = format!("{e:#}");
+        assert!(
+            msg.contains("'localiser.heading_rule'")
+                && msg.contains("sideways")
+                && !msg.contains("astar")
+                && msg.contains("line 2"),
+            "{msg}"
+        );
         let e = from_toml_str("[robot]\nradius_m = -1.0\n", None).unwrap_err();
         assert!(format!("{e:#}").contains("robot.radius_m"), "{e:#}");
         let e = from_toml_str("# tuning\n[navigator]\nmin_leg_m = nan\n", None).unwrap_err();

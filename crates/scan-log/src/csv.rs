@@ -223,22 +223,23 @@ fn read_plain_csv(
             None,
         )
     };
-    // The first step off the median step names its row, wherever it lies.
-    let mut steps: Vec<f64> = rows.windows(2).map(|w| w[1].0 - w[0].0).collect();
-    steps.sort_by(f64::total_cmp);
-    let step = steps[steps.len() / 2];
-    for (i, w) in rows.windows(2).enumerate() {
-        if !((w[1].0 - w[0].0 - step).abs() <= SPACING_TOLERANCE * step.abs()) {
-            return Err(uneven(i + 1, w[1].0, w[1].3));
-        }
-    }
     let first = rows[0].0;
     let increment = (rows[n - 1].0 - first) / (n - 1) as f64;
-    for (i, &(b, _, _, lineno)) in rows.iter().enumerate() {
+    let even = rows.iter().enumerate().all(|(i, &(b, ..))| {
         let off = (b - (first + i as f64 * increment)).abs();
-        if !(increment != 0.0 && off <= SPACING_TOLERANCE * increment.abs()) {
-            return Err(uneven(i, b, lineno));
-        }
+        increment != 0.0 && off <= SPACING_TOLERANCE * increment.abs()
+    });
+    if !even {
+        // Name the row where the bearings leave their median step (rounding counts twice in
+        // a step), else the first; an odd last row would make every other row look off.
+        let mut steps: Vec<f64> = rows.windows(2).map(|w| w[1].0 - w[0].0).collect();
+        steps.sort_by(f64::total_cmp);
+        let step = steps[steps.len() / 2];
+        let i = rows
+            .windows(2)
+            .position(|w| (w[1].0 - w[0].0 - step).abs() > 2.0 * SPACING_TOLERANCE * step.abs())
+            .map_or(0, |i| i + 1);
+        return Err(uneven(i, rows[i].0, rows[i].3));
     }
     let max_r = rows
         .iter()

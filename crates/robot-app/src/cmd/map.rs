@@ -52,6 +52,10 @@ pub fn run(args: MapArgs) -> anyhow::Result<()> {
         crate::record::open_log_topic(&args.log, args.sensor.as_deref(), args.topic.as_deref())?;
     let mut geometry = *source.geometry();
     if let Some(deg) = args.spread_deg {
+        anyhow::ensure!(
+            deg.is_finite() && deg > 0.0 && deg <= 360.0,
+            "--spread-deg {deg}: must be above 0 and at most 360"
+        );
         geometry = ScanGeometry::centred(
             geometry.ray_count,
             deg.to_radians(),
@@ -86,14 +90,14 @@ pub fn run(args: MapArgs) -> anyhow::Result<()> {
     stats.scans = total;
     // A map of part of the log is not written: a stop request ends here.
     crate::interrupt::check()?;
-    std::fs::create_dir_all(&args.out)
-        .with_context(|| format!("cannot create {}", args.out.display()))?;
     anyhow::ensure!(
         grid.width() > 0,
         "{}: no hit lies within --max-range {} m: nothing to map",
         args.log.display(),
         args.max_range
     );
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("cannot create {}", args.out.display()))?;
     grid.write_map_server(&args.out, "map")?;
     grid.to_png(&args.out.join("map.png"))?;
     let mut out = std::io::stdout().lock();

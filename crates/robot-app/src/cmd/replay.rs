@@ -83,6 +83,7 @@ pub fn run_to<W: Write>(args: &ReplayArgs, out: &mut W) -> anyhow::Result<()> {
     let mut first_stamp: Option<f64> = None;
     let mut k = 0usize;
     let mut interrupted = false;
+    let mut stopped: Option<anyhow::Error> = None;
     while args.count.is_none_or(|c| k < c) {
         if crate::interrupt::requested() {
             interrupted = true;
@@ -106,9 +107,13 @@ pub fn run_to<W: Write>(args: &ReplayArgs, out: &mut W) -> anyhow::Result<()> {
                 break;
             }
         }
-        super::scan::print_scan(out, args.format, k, &geometry, scan, || {
+        // A reader that has gone away ends the replay; the recording is still finished.
+        if let Err(e) = super::scan::print_scan(out, args.format, k, &geometry, scan, || {
             scan_log::record_json(k, &geometry, &rec)
-        })?;
+        }) {
+            stopped = Some(e);
+            break;
+        }
         if let Some(r) = recorder.as_mut() {
             r.record_scan(&geometry, scan, rec.true_pose, rec.pose)?;
         }
@@ -120,10 +125,14 @@ pub fn run_to<W: Write>(args: &ReplayArgs, out: &mut W) -> anyhow::Result<()> {
     if let Some(v) = live {
         v.finish(None);
     }
-    out.flush()?;
+    let flushed = out.flush();
     if let Some(r) = recorder {
         r.finish()?;
     }
+    if let Some(e) = stopped {
+        return Err(e);
+    }
+    flushed?;
     tracing::info!(
         "{}: {k} scans replayed, {} records skipped",
         args.file.display(),

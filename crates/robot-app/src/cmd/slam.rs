@@ -256,8 +256,9 @@ pub fn write_outputs(
         write_maps(dir, run, &grid)?;
     } else {
         tracing::warn!(
-            "no hit lies within --max-range {max_range_m} m: map.pgm, map.yaml and map.png are not written"
+            "the map holds no hit (no scan placed, or none within {max_range_m} m): map.pgm, map.yaml and map.png are not written"
         );
+        crate::outputs::remove_maps(dir)?;
     }
     let mut text = serde_json::to_string_pretty(&run.report)?;
     text.push('\n');

@@ -126,10 +126,10 @@ fn generate(a: GenerateArgs) -> anyhow::Result<()> {
             "toml" => desc.write_toml(&path)?,
             "yaml" | "yml" => desc
                 .write_map_server(&path, a.resolution)
-                .with_context(|| format!("--resolution {}", a.resolution))?,
+                .map_err(|e| resolution_named(e, a.resolution))?,
             "png" => desc
                 .write_png(&path, a.resolution)
-                .with_context(|| format!("--resolution {}", a.resolution))?,
+                .map_err(|e| resolution_named(e, a.resolution))?,
             _ => bail!("{}: --out must end in .toml, .yaml or .png", path.display()),
         }
         let s = desc.start.unwrap_or_default();
@@ -153,6 +153,23 @@ fn generate(a: GenerateArgs) -> anyhow::Result<()> {
         );
     }
     Ok(())
+}
+
+/// A raster error that comes from `--resolution` names the option.
+fn resolution_named(e: sim_laser::SimError, resolution: f64) -> anyhow::Error {
+    let from_resolution = matches!(
+        &e,
+        sim_laser::SimError::InvalidConfig {
+            field: "resolution_m",
+            ..
+        }
+    );
+    let e = anyhow::Error::new(e);
+    if from_resolution {
+        e.context(format!("--resolution {resolution}"))
+    } else {
+        e
+    }
 }
 
 fn info(a: InfoArgs) -> anyhow::Result<()> {
