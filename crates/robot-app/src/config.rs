@@ -63,7 +63,8 @@ pub fn from_toml_str_over(
     };
     let mut preset = Params::preset(method.or(file_method).unwrap_or_default());
     adjust(&mut preset);
-    let mut merged = toml::Table::try_from(&preset).context("serialising the preset")?;
+    let base = toml::Table::try_from(&preset).context("serialising the preset")?;
+    let mut merged = base.clone();
     merge(&mut merged, &user, "", text)?;
     // The command line's method names the preset actually used.
     merged.insert(
@@ -75,7 +76,6 @@ pub fn from_toml_str_over(
         Err(e) => {
             // A value of the right TOML type that the key does not take (an unknown name):
             // the first one that alone breaks the preset is named with its line.
-            let base = toml::Table::try_from(&preset).context("serialising the preset")?;
             for (section, key, value) in leaves(&user, "") {
                 let mut one = base.clone();
                 let slot = match one.get_mut(&section).and_then(toml::Value::as_table_mut) {

@@ -40,7 +40,7 @@ pub use sampling::{
     FreeSpace, PAIR_CELL_M, PairSampler, WorldKind, clutter_world_params, corridor_world_params,
     generated_world, pair_salt, random_world_params,
 };
-pub use scenario::{SimSetup, file_scenario, paper_start, paper_target};
+pub use scenario::{SimSetup, file_scenario, paper_start, paper_target, stored_scenario};
 pub use sensor::{
     DROPOUT_CODE, LaserNoise, SensorPreset, SigmaCombine, TOO_NEAR_CODE, cast_scan, true_scan,
 };

@@ -19,17 +19,25 @@ pub fn paper_target() -> WorldPoint {
 
 /// The start pose and target of a world: those stored in a TOML world, else the paper's.
 pub fn file_scenario(path: Option<&Path>) -> Result<(Pose2, WorldPoint), SimError> {
-    let (mut start, mut target) = (paper_start(), paper_target());
-    if let Some(p) = path.filter(|p| p.extension().is_some_and(|e| e == "toml")) {
-        let d = read_description(p)?;
-        if let Some([x, y, t]) = d.start {
-            start = Pose2::new(x, y, t);
-        }
-        if let Some([x, y]) = d.target {
-            target = WorldPoint::new(x, y);
-        }
-    }
-    Ok((start, target))
+    let (start, target) = stored_scenario(path)?;
+    Ok((
+        start.unwrap_or_else(paper_start),
+        target.unwrap_or_else(paper_target),
+    ))
+}
+
+/// The start pose and target a world file stores (only a TOML world can); none for no file.
+pub fn stored_scenario(
+    path: Option<&Path>,
+) -> Result<(Option<Pose2>, Option<WorldPoint>), SimError> {
+    let Some(p) = path.filter(|p| p.extension().is_some_and(|e| e == "toml")) else {
+        return Ok((None, None));
+    };
+    let d = read_description(p)?;
+    Ok((
+        d.start.map(|[x, y, t]| Pose2::new(x, y, t)),
+        d.target.map(|[x, y]| WorldPoint::new(x, y)),
+    ))
 }
 
 /// Every choice that defines a simulation: world, sensor, seed, noise, robot size and start.

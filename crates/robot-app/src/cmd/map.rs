@@ -98,8 +98,7 @@ pub fn run(args: MapArgs) -> anyhow::Result<()> {
     );
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("cannot create {}", args.out.display()))?;
-    grid.write_map_server(&args.out, "map")?;
-    grid.to_png(&args.out.join("map.png"))?;
+    crate::outputs::write_grid(&args.out, &grid)?;
     let mut out = std::io::stdout().lock();
     writeln!(
         out,

@@ -178,16 +178,15 @@ fn info(a: InfoArgs) -> anyhow::Result<()> {
         Some(p) => World::load(p).with_context(|| format!("loading world {}", p.display()))?,
     };
     let (lo, hi) = world.bounds();
-    let (start, target) = sim_laser::file_scenario(a.path.as_deref().map(Path::new))?;
-    // Only a TOML world stores a scenario; any other falls back to the paper's.
-    let stored = match a.path.as_deref().map(Path::new) {
-        None => (true, true),
-        Some(p) if p.extension().is_some_and(|e| e == "toml") => {
-            let d = sim_laser::read_description(p)?;
-            (d.start.is_some(), d.target.is_some())
-        }
-        Some(_) => (false, false),
-    };
+    // The paper's world is the paper's scenario; another world without one falls back to it.
+    let path = a.path.as_deref().map(Path::new);
+    let (start, target) = sim_laser::stored_scenario(path)?;
+    let stored = (
+        path.is_none() || start.is_some(),
+        path.is_none() || target.is_some(),
+    );
+    let start = start.unwrap_or_else(sim_laser::paper_start);
+    let target = target.unwrap_or_else(sim_laser::paper_target);
     let fallback = |stored: bool| {
         if stored {
             ""
