@@ -373,11 +373,14 @@ fn matched(
         ..*params
     };
     let mut best = target.align(&nav.geometry, scan, guess, &prior);
-    // The laser disagrees with the commands when the match, pulled toward them by the prior,
-    // still lands several prior sigmas away (or fails).
-    let disagrees = best
-        .as_ref()
-        .is_none_or(|m| (m.pose.x_m - ahead_m).abs() > DISAGREE_SIGMAS * prior.prior_sigma_m);
+    // The laser does not confirm the commands when the match, pulled toward them by the
+    // prior, still lands several prior sigmas away, fails, or leaves the travel to the prior
+    // (a base that did not move sees its front wall a leg away from where the command puts it:
+    // only the side walls pair).
+    let disagrees = best.as_ref().is_none_or(|m| {
+        (m.pose.x_m - ahead_m).abs() > DISAGREE_SIGMAS * prior.prior_sigma_m
+            || m.data_worst_sigma_m > CONSTRAINED_SIGMA_M
+    });
     if ahead_m.abs() >= PARTIAL_MIN_M && disagrees {
         let hits = scan.robot_hits(&nav.geometry).count();
         // The commands do not explain the scan: try partial travel, a hypothesis of the

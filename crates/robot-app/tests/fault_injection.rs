@@ -11,7 +11,7 @@ use std::time::Duration;
 
 use scan_types::{MotionBase, WorldPoint};
 use sim_laser::{BaseGains, SensorPreset, SimBase, Simulation, TruthHandle, World, paper_start};
-use urg_driver::{Fault, Model, Profile, PtyServer};
+use urg_driver::{Fault, FixedSource, Model, Profile, PtyServer};
 
 /// A goal two legs from the paper's start (about 70 scans): quick over a 10 Hz sensor.
 const GOAL: (f64, f64) = (-1.0, -3.0);
@@ -438,4 +438,54 @@ fn a_base_error_ends_as_base_failure_not_sensor_failure() {
         .to_string();
     assert!(note.contains("motor stalled"), "{note}");
     end.assert_clean_end();
+}
+
+#[test]
+fn a_base_that_never_moves_is_not_taken_to_have_arrived_one_leg_away() {
+    // The emulator's fixed room: walls 3 m ahead, 1.5 m behind and 2.5 m / 2 m to the sides.
+    // The target lies 1 m straight ahead, one leg; the base answers `done` and never moves,
+    // so every scan is the first one. After a commanded 1 m the side walls pair either way,
+    // but the wall ahead is still 3 m away: the laser puts the travel at 0, not the command.
+    let p = Profile::of(Model::Urg04lx);
+    let server =
+        urg_driver::serve_pty(p.clone(), FixedSource::room(p.params.geometry())).expect("a pty");
+    let out = tempfile::tempdir().unwrap();
+    let mut child = Command::new(env!("CARGO_BIN_EXE_robot-app"))
+        .args(["run", "--port", server.path(), "--goal=1,0"])
+        .args(["--base", "stdio"])
+        .args(["--no-slam-map", "--out"])
+        .arg(out.path().join("run"))
+        .env("RUST_LOG", "warn")
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("robot-app starts");
+    let mut to_app = child.stdin.take().unwrap();
+    let from_app = BufReader::new(child.stdout.take().unwrap());
+    let (mut forward_m, mut stops) = (0.0, 0);
+    for line in from_app.lines() {
+        let line = line.unwrap();
+        let mut words = line.split_whitespace();
+        match (words.next(), words.next().map(str::parse::<f64>)) {
+            (Some("forward"), Some(Ok(d))) => forward_m += d,
+            (Some("rotate"), Some(Ok(_))) => {}
+            (Some("stop"), None) => stops += 1,
+            _ => panic!("not a base command: {line:?}"),
+        }
+        let _ = writeln!(to_app, "done");
+        let _ = to_app.flush();
+    }
+    let status = child.wait().unwrap();
+    server.stop();
+    let summary: serde_json::Value = serde_json::from_slice(
+        &std::fs::read(out.path().join("run/summary.json")).expect("summary.json written"),
+    )
+    .unwrap();
+    assert!(!status.success());
+    assert_eq!(summary["reason"], "base_stalled", "{summary}");
+    assert_eq!(summary["reached"], false);
+    // It was told to drive the leg (twice: stall_legs), and stopped once at the end.
+    assert!(forward_m >= 1.9, "commanded {forward_m} m");
+    assert_eq!(stops, 1);
 }
