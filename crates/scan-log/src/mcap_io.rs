@@ -683,6 +683,14 @@ pub(crate) fn scan_mcap(bytes: &[u8], path: &Path) -> Found {
                 .map_err(|m| bad(format!("not a protobuf {FOXGLOVE_LASER_SCAN}: {m}"))),
             // goalseek's JSON poses; a ROS 2 recording's CDR poses on the same topics are not.
             None if msg.channel.message_encoding == "json" && pose_topic(topic).is_some() => {
+                // Named among the other topics (for a --topic that is not a laser topic).
+                if !found
+                    .other
+                    .iter()
+                    .any(|o| o.split(' ').next() == Some(topic))
+                {
+                    found.other_topic(format!("{topic} (goalseek poses of {SCAN_TOPIC})"));
+                }
                 let pose: PoseMsg = match serde_json::from_slice(&msg.data) {
                     Ok(p) => p,
                     Err(e) => {

@@ -420,3 +420,29 @@ fn recordings_with_the_old_names_still_read() {
     );
     assert_eq!(again["goal"], r#"{"x_m":4.0,"y_m":4.0}"#);
 }
+
+#[test]
+fn an_unknown_topic_names_a_recordings_pose_topics() {
+    let g = ScanGeometry::paper();
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("run.mcap");
+    let mut rec = McapRecorder::create(&path).unwrap();
+    for (s, t, e) in scans(3, &g, 1) {
+        rec.record_scan(&g, &s, t, e).unwrap();
+    }
+    rec.finish().unwrap();
+    let options = LogOptions {
+        topic: Some("/pose_estimate".into()),
+        ..LogOptions::default()
+    };
+    let Err(e) = LogSource::open(&path, &options) else {
+        panic!("a pose topic opened as a laser topic");
+    };
+    let text = e.to_string();
+    assert!(
+        text.contains(
+            "no laser scan topic /pose_estimate (laser topics: /scan; other topics: /pose_truth (goalseek poses of /scan), /pose_estimate (goalseek poses of /scan))"
+        ),
+        "{text}"
+    );
+}
