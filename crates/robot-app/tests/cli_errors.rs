@@ -429,6 +429,13 @@ fn a_slam_run_with_nothing_in_map_range_still_writes_its_report() {
     let report: serde_json::Value =
         serde_json::from_slice(&std::fs::read(dir.path().join("slam.json")).unwrap()).unwrap();
     assert_eq!(report["placed"].as_u64(), Some(756));
+    // No map, so no consistency figure (not 0 %), here and on the summary line.
+    assert!(report["map_consistency_share"].is_null(), "{report}");
+    assert!(
+        String::from_utf8_lossy(&o.stdout).contains("no map (no hit in map range)"),
+        "{}",
+        String::from_utf8_lossy(&o.stdout)
+    );
     assert!(dir.path().join("trajectory.tum").exists());
     assert!(!dir.path().join("map.pgm").exists());
 }

@@ -57,8 +57,9 @@ pub struct SlamReport {
     pub start_to_end_m: f64,
     /// Length of the estimated path, metres.
     pub estimated_path_length_m: f64,
-    /// Share of the map's hit endpoints within one cell of an occupied cell.
-    pub map_consistency_share: f64,
+    /// Share of the map's hit endpoints within one cell of an occupied cell (`None`: no hit
+    /// in map range, no map).
+    pub map_consistency_share: Option<f64>,
     /// True when some scan's search was centred on a motion source's pose change
     /// ([`LogRun::add_with_motion`]): the trajectory is then not the laser's alone.
     pub motion_prior: bool,
@@ -262,7 +263,7 @@ impl LogRun {
                 .windows(2)
                 .map(|w| w[0].pose.position().distance_m(&w[1].pose.position()))
                 .sum(),
-            map_consistency_share: 0.0,
+            map_consistency_share: None,
             motion_prior: used_motion,
             evaluation: evaluate(&placed, loop_closure.as_ref()),
             loop_closure,
@@ -288,7 +289,7 @@ impl SlamRun {
             .collect();
         let (grid, stats) =
             localiser::build_map(&self.geometry, &scans, resolution_m, max_range_m, false);
-        self.report.map_consistency_share = stats.endpoint_fit();
+        self.report.map_consistency_share = (stats.endpoints > 0).then(|| stats.endpoint_fit());
         grid
     }
 }

@@ -466,14 +466,18 @@ pub fn run(args: SlamArgs) -> anyhow::Result<()> {
         0 => String::new(),
         n => format!(", {n} malformed records left out"),
     };
+    let consistency = r
+        .map_consistency_share
+        .map_or("no map (no hit in map range)".to_string(), |c| {
+            format!("map consistency {:.1} %", 100.0 * c)
+        });
     crate::say!(
-        "{}: {} of {} scans placed, {} skipped{malformed}; {:.2} ms per scan (median), map consistency {:.1} %, start to end {:.2} m{closures}{eval}; outputs in {}",
+        "{}: {} of {} scans placed, {} skipped{malformed}; {:.2} ms per scan (median), {consistency}, start to end {:.2} m{closures}{eval}; outputs in {}",
         args.log.display(),
         r.placed,
         r.scans,
         r.skipped.len(),
         r.time_per_scan_ms[0],
-        100.0 * r.map_consistency_share,
         r.start_to_end_m,
         args.out.display()
     );
