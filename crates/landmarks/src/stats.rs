@@ -24,6 +24,8 @@ pub struct LandmarkCounts {
     pub followed: usize,
     /// Of those, re-identified in the next scan.
     pub reidentified: usize,
+    /// Found landmarks that are max-range jumps (the paper's kind).
+    pub max_range_jumps: usize,
     /// Found landmarks within the range-limit margin of the maximum range.
     pub range_limit: usize,
     /// Found edge landmarks whose no-return gap is a short dropout.
@@ -41,6 +43,7 @@ impl LandmarkCounts {
         self.found += o.found;
         self.followed += o.followed;
         self.reidentified += o.reidentified;
+        self.max_range_jumps += o.max_range_jumps;
         self.range_limit += o.range_limit;
         self.dropout += o.dropout;
         self.dropout_reidentified += o.dropout_reidentified;
@@ -107,6 +110,7 @@ pub fn count_scan(
         })
         .collect();
     for (l, &d) in found.iter().zip(&is_dropout) {
+        c.max_range_jumps += usize::from(l.kind == LandmarkKind::MaxRangeJump);
         c.range_limit += usize::from(l.near_range_limit);
         c.dropout += usize::from(d);
     }
@@ -202,10 +206,33 @@ mod tests {
             3,
         );
         assert_eq!(c.found, 2);
+        assert_eq!(c.max_range_jumps, 2);
         assert_eq!(
             (c.followed, c.reidentified, c.range_limit, c.dropout),
             (2, 2, 0, 0)
         );
+    }
+
+    #[test]
+    fn an_occlusion_edge_is_not_counted_as_a_max_range_jump() {
+        // A near wall at 1 m on the right half, a far one at 2 m on the left: every ray hits,
+        // and the 1 m step between them is an occlusion edge, no max-range jump.
+        let g = ScanGeometry::paper();
+        let r: Vec<f64> = (0..g.ray_count)
+            .map(|i| if i < g.ray_count / 2 { 1.0 } else { 2.0 })
+            .collect();
+        let s = Scan::from_ranges(&g, &r, 0.0);
+        let c = count_scan(
+            &g,
+            &s,
+            None,
+            None,
+            &DetectParams::default(),
+            &TrackParams::default(),
+            3,
+        );
+        assert!(c.found >= 1, "{c:?}");
+        assert_eq!(c.max_range_jumps, 0, "{c:?}");
     }
 
     #[test]

@@ -77,15 +77,18 @@ pub fn run(args: LandmarksArgs) -> anyhow::Result<()> {
     }
     let mut out = std::io::stdout().lock();
     if args.per_scan {
-        writeln!(out, "scan,found,reidentified_next,range_limit,dropout")?;
+        writeln!(
+            out,
+            "scan,found,max_range_jumps,reidentified_next,range_limit,dropout"
+        )?;
     }
     let mut total = LandmarkCounts::default();
     for (k, c) in counts.iter().enumerate() {
         if args.per_scan {
             writeln!(
                 out,
-                "{k},{},{},{},{}",
-                c.found, c.reidentified, c.range_limit, c.dropout
+                "{k},{},{},{},{},{}",
+                c.found, c.max_range_jumps, c.reidentified, c.range_limit, c.dropout
             )?;
         }
         total.add(c);
@@ -93,7 +96,7 @@ pub fn run(args: LandmarksArgs) -> anyhow::Result<()> {
     let with_poses = records.iter().filter(|r| r.1.is_some()).count();
     writeln!(
         out,
-        "{}: {} scans ({} with poses), rules {}, gate {} m: {} landmarks ({:.2} a scan); re-identified in the next scan {} of {} ({:.1} %); range-limit artefacts {} ({:.1} %); dropout edges (gap <= {} rays) {} ({:.1} %), of which re-identified {:.1} %, others re-identified {:.1} %",
+        "{}: {} scans ({} with poses), rules {}, gate {} m: {} landmarks ({:.2} a scan), {} of them max-range jumps ({:.2} a scan); re-identified in the next scan {} of {} ({:.1} %); range-limit artefacts {} ({:.1} %); dropout edges (gap <= {} rays) {} ({:.1} %), of which re-identified {:.1} %, others re-identified {:.1} %",
         args.log.display(),
         total.scans,
         with_poses,
@@ -101,6 +104,8 @@ pub fn run(args: LandmarksArgs) -> anyhow::Result<()> {
         track.gate_m,
         total.found,
         total.found as f64 / total.scans.max(1) as f64,
+        total.max_range_jumps,
+        total.max_range_jumps as f64 / total.scans.max(1) as f64,
         total.reidentified,
         total.followed,
         100.0 * total.reid_rate(),
