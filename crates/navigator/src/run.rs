@@ -142,7 +142,10 @@ where
                     }
                     next
                 }
-                Err(e) => nav.fail(Reason::SensorFailure, format!("laser: {e}")),
+                Err(e) => match monitor.interrupted() {
+                    Some(note) => nav.fail(Reason::Interrupted, format!("{note}; laser: {e}")),
+                    None => nav.fail(Reason::SensorFailure, format!("laser: {e}")),
+                },
             },
             Action::Rotate { angle_rad } => {
                 let done = base.rotate(angle_rad);
@@ -170,6 +173,10 @@ fn motion_done<E: std::fmt::Display>(
                 None => next,
             }
         }
-        Err(e) => nav.fail(Reason::BaseFailure, format!("base: {e}")),
+        // A move given up because of Ctrl-C or SIGTERM (or whose base went with the signal).
+        Err(e) => match monitor.interrupted() {
+            Some(note) => nav.fail(Reason::Interrupted, format!("{note}; base: {e}")),
+            None => nav.fail(Reason::BaseFailure, format!("base: {e}")),
+        },
     }
 }

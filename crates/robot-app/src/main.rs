@@ -80,6 +80,12 @@ fn main() -> ExitCode {
             ExitCode::from(robot_app::interrupt::EXIT_CODE)
         }
         Err(e) if is_broken_pipe(&e) => ExitCode::SUCCESS,
+        // A command that failed once a stop was asked for (a sensor given up while it was
+        // being reconnected) ends as an interrupted one.
+        Err(e) if robot_app::interrupt::requested() => {
+            tracing::warn!("after the stop request: {}", one_line(&e));
+            ExitCode::from(robot_app::interrupt::EXIT_CODE)
+        }
         Err(e) => {
             #[allow(clippy::print_stderr)]
             {

@@ -158,14 +158,28 @@ pub fn spl(reached: bool, geodesic_m: f64, path_m: f64) -> f64 {
     geodesic_m / path_m.max(geodesic_m)
 }
 
-/// Prints a result line on stdout. A reader that has gone away (`robot-app ... | head`) is no
-/// error: the work goes on and its files are written.
+/// Set once standard output carries a base's commands (`--base stdio`).
+static STDOUT_IS_BASE: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+/// Sends result lines to standard error from now on: standard output carries nothing but a
+/// base's commands.
+pub fn stdout_is_base() {
+    STDOUT_IS_BASE.store(true, std::sync::atomic::Ordering::SeqCst);
+}
+
+/// Prints a result line on stdout (stderr once [`stdout_is_base`]). A reader that has gone
+/// away (`robot-app ... | head`) is no error: the work goes on and its files are written.
 pub fn say(text: std::fmt::Arguments) {
     use std::io::Write;
-    if let Err(e) = std::io::stdout().lock().write_fmt(text)
+    let written = if STDOUT_IS_BASE.load(std::sync::atomic::Ordering::SeqCst) {
+        std::io::stderr().lock().write_fmt(text)
+    } else {
+        std::io::stdout().lock().write_fmt(text)
+    };
+    if let Err(e) = written
         && e.kind() != std::io::ErrorKind::BrokenPipe
     {
-        tracing::error!("cannot write to stdout: {e}");
+        tracing::error!("cannot write a result line: {e}");
     }
 }
 

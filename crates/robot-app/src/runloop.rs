@@ -61,7 +61,7 @@ pub struct LoopRun {
 
 /// The note of a run stopped by Ctrl-C or SIGTERM ([`crate::interrupt`]).
 fn interrupted() -> Option<String> {
-    crate::interrupt::requested().then(|| "stopped by a signal (Ctrl-C or SIGTERM)".into())
+    crate::interrupt::requested().then(|| "stopped by a signal (Ctrl-C, SIGTERM or SIGHUP)".into())
 }
 
 /// Runs the navigator with `params` from `start` to `goal` on `laser` and `base`; `eval`

@@ -489,3 +489,75 @@ fn a_base_that_never_moves_is_not_taken_to_have_arrived_one_leg_away() {
     assert!(forward_m >= 1.9, "commanded {forward_m} m");
     assert_eq!(stops, 1);
 }
+
+#[test]
+fn sigint_while_a_move_goes_unanswered_still_stops_the_base_and_exits_130() {
+    // The base takes move 8 and never answers it (stuck, or a slow move); Ctrl-C comes then.
+    let mut h = Harness::start(BaseGains::default(), &[]);
+    let pid = nix::unistd::Pid::from_raw(i32::try_from(h.child.id()).unwrap());
+    let mut line = String::new();
+    let mut after_signal = Vec::new();
+    loop {
+        line.clear();
+        if h.from_app.read_line(&mut line).unwrap_or(0) == 0 {
+            break;
+        }
+        let cmd = line.trim().to_string();
+        if cmd == "stop" {
+            h.stops += 1;
+        } else if h.commands < 8 {
+            let mut words = cmd.split_whitespace();
+            match (words.next(), words.next().map(str::parse::<f64>)) {
+                (Some("rotate"), Some(Ok(a))) => h.base.rotate(a).unwrap(),
+                (Some("forward"), Some(Ok(d))) => h.base.forward(d).unwrap(),
+                _ => panic!("not a base command: {cmd:?}"),
+            }
+        }
+        if h.commands >= 8 {
+            after_signal.push(cmd.clone());
+        }
+        if cmd != "stop" {
+            h.commands += 1;
+            if h.commands == 8 {
+                std::thread::sleep(Duration::from_millis(300));
+                nix::sys::signal::kill(pid, nix::sys::signal::Signal::SIGINT).unwrap();
+                continue;
+            }
+        }
+        let _ = writeln!(h.to_app, "done");
+        let _ = h.to_app.flush();
+    }
+    let end = h.finish();
+    assert_eq!(end.status.code(), Some(130), "stderr:\n{}", end.stderr);
+    assert_eq!(end.reason(), "interrupted");
+    // Nothing but `stop` after the unanswered move.
+    assert_eq!(after_signal, ["stop"], "stderr:\n{}", end.stderr);
+    end.assert_clean_end();
+}
+
+#[test]
+fn a_run_that_fails_to_start_stops_the_base_and_keeps_the_earlier_recording() {
+    // A target too far for any map: refused after the base and the sensor are open.
+    let p = Profile::of(Model::Urg04lx);
+    let server =
+        urg_driver::serve_pty(p.clone(), FixedSource::room(p.params.geometry())).expect("a pty");
+    let out = tempfile::tempdir().unwrap();
+    let run = out.path().join("run");
+    std::fs::create_dir_all(&run).unwrap();
+    let earlier = b"an earlier run's recording".to_vec();
+    std::fs::write(run.join("run.mcap"), &earlier).unwrap();
+    let o = Command::new(env!("CARGO_BIN_EXE_robot-app"))
+        .args(["run", "--port", server.path(), "--goal=1e19,0"])
+        .args(["--base", "stdio", "--out"])
+        .arg(&run)
+        .env("RUST_LOG", "warn")
+        .stdin(Stdio::null())
+        .output()
+        .expect("robot-app runs");
+    server.stop();
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "{stderr}");
+    assert_eq!(String::from_utf8_lossy(&o.stdout), "stop\n", "{stderr}");
+    assert_eq!(std::fs::read(run.join("run.mcap")).unwrap(), earlier);
+    assert_no_partial_files(&run);
+}

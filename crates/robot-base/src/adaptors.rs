@@ -1,4 +1,5 @@
-//! Adaptors over any [`MotionBase`]: one that records every command, one that executes none.
+//! Adaptors over any [`MotionBase`]: one that records every command, one that executes none,
+//! one that sends `stop` when dropped unless the last command was one.
 
 use scan_types::MotionBase;
 
@@ -47,6 +48,49 @@ impl<M: MotionBase> MotionBase for LoggingBase<M> {
     }
 }
 
+/// A motion base that sends `stop` when dropped unless `stop` was the last command it passed
+/// on: an early error or a panic still stops the robot.
+pub struct StopOnDrop<M: MotionBase> {
+    inner: M,
+    stopped: bool,
+}
+
+impl<M: MotionBase> StopOnDrop<M> {
+    /// Wraps `inner`, not yet stopped.
+    pub fn new(inner: M) -> Self {
+        Self {
+            inner,
+            stopped: false,
+        }
+    }
+}
+
+impl<M: MotionBase> MotionBase for StopOnDrop<M> {
+    type Error = M::Error;
+    fn rotate(&mut self, angle_rad: f64) -> Result<(), Self::Error> {
+        self.stopped = false;
+        self.inner.rotate(angle_rad)
+    }
+    fn forward(&mut self, distance_m: f64) -> Result<(), Self::Error> {
+        self.stopped = false;
+        self.inner.forward(distance_m)
+    }
+    fn stop(&mut self) -> Result<(), Self::Error> {
+        self.stopped = true;
+        self.inner.stop()
+    }
+}
+
+impl<M: MotionBase> Drop for StopOnDrop<M> {
+    fn drop(&mut self) {
+        if !self.stopped
+            && let Err(e) = self.inner.stop()
+        {
+            tracing::warn!("the base did not take stop: {e}");
+        }
+    }
+}
+
 /// A motion base that does nothing (a replay: the recorded scans already moved).
 #[derive(Debug, Default, Clone, Copy)]
 pub struct NoMotion;
@@ -67,6 +111,27 @@ impl MotionBase for NoMotion {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn stop_on_drop_stops_once_however_it_ends() {
+        let mut log = LoggingBase::new(NoMotion);
+        {
+            let mut b = StopOnDrop::new(&mut log);
+            b.forward(1.0).unwrap();
+        }
+        assert_eq!(log.commands, [Command::Forward(1.0), Command::Stop]);
+        let mut log = LoggingBase::new(NoMotion);
+        {
+            let mut b = StopOnDrop::new(&mut log);
+            b.rotate(0.5).unwrap();
+            b.stop().unwrap();
+        }
+        assert_eq!(log.commands, [Command::Rotate(0.5), Command::Stop]);
+        // Never moved: still told to stop.
+        let mut log = LoggingBase::new(NoMotion);
+        drop(StopOnDrop::new(&mut log));
+        assert_eq!(log.commands, [Command::Stop]);
+    }
 
     #[test]
     fn logging_base_records_in_order() {

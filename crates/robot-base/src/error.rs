@@ -29,6 +29,12 @@ pub enum BaseError {
         /// The command sent.
         command: String,
     },
+    /// Waiting for the answer was given up (Ctrl-C or SIGTERM during a move).
+    #[error("stopped waiting for the answer to '{command}'")]
+    Cancelled {
+        /// The command sent.
+        command: String,
+    },
     /// The operator stopped a manual run.
     #[error("stopped by the operator")]
     Aborted,

@@ -13,17 +13,19 @@
 //! let mut base = robot_base::LineBase::new(answers, Vec::new());
 //! base.rotate(0.5).unwrap();
 //! base.stop().unwrap();
-//! let (_, sent) = base.into_inner();
+//! let sent = base.into_writer();
 //! assert_eq!(sent, b"rotate 0.500000\nstop\n");
 //! ```
 
 mod adaptors;
+mod answers;
 mod error;
 mod line;
 mod manual;
 mod open;
 
-pub use adaptors::{Command, LoggingBase, NoMotion};
+pub use adaptors::{Command, LoggingBase, NoMotion, StopOnDrop};
+pub use answers::MAX_LINE_BYTES;
 pub use error::BaseError;
 pub use line::{LineBase, forward_line, rotate_line};
 pub use manual::ManualBase;

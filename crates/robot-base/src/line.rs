@@ -10,6 +10,7 @@ use std::io::{BufRead, Write};
 use scan_types::MotionBase;
 
 use crate::BaseError;
+use crate::answers::Answers;
 
 /// The line to send for a rotation.
 pub fn rotate_line(angle_rad: f64) -> String {
@@ -22,20 +23,33 @@ pub fn forward_line(distance_m: f64) -> String {
 }
 
 /// A base spoken to over the line protocol on any reader/writer pair.
-pub struct LineBase<R, W> {
-    reader: R,
+pub struct LineBase<W> {
+    answers: Answers,
     writer: W,
+    cancel: Option<fn() -> bool>,
 }
 
-impl<R: BufRead, W: Write> LineBase<R, W> {
-    /// A base that reads answers from `reader` and writes commands to `writer`.
-    pub fn new(reader: R, writer: W) -> Self {
-        Self { reader, writer }
+impl<W: Write> LineBase<W> {
+    /// A base that reads answers from `reader` (on a thread of its own) and writes commands
+    /// to `writer`.
+    pub fn new<R: BufRead + Send + 'static>(reader: R, writer: W) -> Self {
+        Self {
+            answers: Answers::new(reader),
+            writer,
+            cancel: None,
+        }
     }
 
-    /// Gives the reader and writer back.
-    pub fn into_inner(self) -> (R, W) {
-        (self.reader, self.writer)
+    /// Gives up waiting for a move's answer once `cancel` returns true (checked every 50 ms);
+    /// the move then fails with [`BaseError::Cancelled`]. `stop` is always waited for.
+    pub fn with_cancel(mut self, cancel: fn() -> bool) -> Self {
+        self.cancel = Some(cancel);
+        self
+    }
+
+    /// Gives the writer back.
+    pub fn into_writer(self) -> W {
+        self.writer
     }
 
     /// Sends one command and waits for its answer.
@@ -44,21 +58,13 @@ impl<R: BufRead, W: Write> LineBase<R, W> {
         self.writer.write_all(command.as_bytes())?;
         self.writer.write_all(b"\n")?;
         self.writer.flush()?;
-        let mut line = String::new();
+        let cancel = if command == "stop" { None } else { self.cancel };
         loop {
-            line.clear();
-            let n = match self.reader.read_line(&mut line) {
-                Ok(n) => n,
-                // A serial port with a read timeout: keep waiting, moves can be slow.
-                Err(e) if e.kind() == std::io::ErrorKind::TimedOut => continue,
-                Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
-                Err(e) => return Err(e.into()),
-            };
-            if n == 0 {
+            let Some(line) = self.answers.next(command, cancel)? else {
                 return Err(BaseError::Closed {
                     command: command.to_string(),
                 });
-            }
+            };
             let t = line.trim();
             tracing::debug!(answer = t, "base ->");
             if t.is_empty() || t.starts_with('#') {
@@ -83,7 +89,7 @@ impl<R: BufRead, W: Write> LineBase<R, W> {
     }
 }
 
-impl<R: BufRead, W: Write> MotionBase for LineBase<R, W> {
+impl<W: Write> MotionBase for LineBase<W> {
     type Error = BaseError;
     fn rotate(&mut self, angle_rad: f64) -> Result<(), BaseError> {
         self.command(&rotate_line(angle_rad))
@@ -101,7 +107,7 @@ mod tests {
     use super::*;
     use std::io::Cursor;
 
-    fn base(answers: &str) -> LineBase<Cursor<Vec<u8>>, Vec<u8>> {
+    fn base(answers: &str) -> LineBase<Vec<u8>> {
         LineBase::new(Cursor::new(answers.as_bytes().to_vec()), Vec::new())
     }
 
@@ -111,7 +117,7 @@ mod tests {
         b.rotate(0.5).unwrap();
         b.forward(-0.25).unwrap();
         b.stop().unwrap();
-        let (_, sent) = b.into_inner();
+        let sent = b.into_writer();
         assert_eq!(
             String::from_utf8(sent).unwrap(),
             "rotate 0.500000\nforward -0.2500\nstop\n"
@@ -143,6 +149,55 @@ mod tests {
         let mut b = base("done\r\nerror\r\n");
         b.stop().unwrap();
         assert!(matches!(b.stop(), Err(BaseError::Refused { message, .. }) if message.is_empty()));
+    }
+
+    #[test]
+    fn an_endless_answer_is_cut_and_named() {
+        let long = format!("{}\ndone\n", "x".repeat(3 * crate::MAX_LINE_BYTES));
+        let mut b = base(&long);
+        let e = b.forward(1.0).unwrap_err();
+        let BaseError::Protocol { line, .. } = &e else {
+            panic!("{e}");
+        };
+        assert!(line.len() < 200, "{line}");
+        assert!(
+            line.contains(&format!("{} bytes", 3 * crate::MAX_LINE_BYTES)),
+            "{line}"
+        );
+        // The rest of the long line was dropped: the next answer is read whole.
+        b.stop().unwrap();
+    }
+
+    static GIVE_UP: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+    fn give_up() -> bool {
+        GIVE_UP.load(std::sync::atomic::Ordering::SeqCst)
+    }
+
+    #[test]
+    fn a_move_never_answered_is_given_up_but_stop_is_waited_for() {
+        use std::io::{BufReader, Write};
+        use std::os::unix::net::UnixStream;
+        let (host, mut peer) = UnixStream::pair().unwrap();
+        let mut b =
+            LineBase::new(BufReader::new(host.try_clone().unwrap()), host).with_cancel(give_up);
+        GIVE_UP.store(true, std::sync::atomic::Ordering::SeqCst);
+        let t = std::time::Instant::now();
+        let e = b.forward(1.0).unwrap_err();
+        assert!(
+            matches!(&e, BaseError::Cancelled { command } if command == "forward 1.0000"),
+            "{e}"
+        );
+        assert!(t.elapsed() < std::time::Duration::from_secs(1));
+        // `stop` is not given up: it waits for the base's answer.
+        let answer = std::thread::spawn(move || {
+            std::thread::sleep(std::time::Duration::from_millis(200));
+            writeln!(peer, "done").unwrap();
+            peer
+        });
+        b.stop().unwrap();
+        assert!(t.elapsed() >= std::time::Duration::from_millis(200));
+        drop(answer.join().unwrap());
     }
 
     /// A peer on the other end of a pipe pair that executes moves and answers.
@@ -182,7 +237,7 @@ mod tests {
         b.forward(1.5).unwrap();
         assert!(matches!(b.forward(3.0), Err(BaseError::Refused { .. })));
         b.stop().unwrap();
-        let (_, w) = b.into_inner();
+        let w = b.into_writer();
         w.shutdown(std::net::Shutdown::Both).unwrap();
         let (heading, x) = handle.join().unwrap();
         assert!((heading - std::f64::consts::PI).abs() < 1e-6);

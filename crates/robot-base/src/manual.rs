@@ -5,23 +5,33 @@ use std::io::{BufRead, Write};
 use scan_types::MotionBase;
 
 use crate::BaseError;
+use crate::answers::Answers;
 
 /// A base moved by a person: each move is printed, and Enter confirms it was made
 /// (`q` then Enter stops the run).
-pub struct ManualBase<R, W> {
-    reader: R,
+pub struct ManualBase<W> {
+    answers: Answers,
     writer: W,
     moves: usize,
+    cancel: Option<fn() -> bool>,
 }
 
-impl<R: BufRead, W: Write> ManualBase<R, W> {
-    /// A manual base prompting on `writer` and reading confirmations from `reader`.
-    pub fn new(reader: R, writer: W) -> Self {
+impl<W: Write> ManualBase<W> {
+    /// A manual base prompting on `writer` and reading confirmations from `reader` (on a
+    /// thread of its own).
+    pub fn new<R: BufRead + Send + 'static>(reader: R, writer: W) -> Self {
         Self {
-            reader,
+            answers: Answers::new(reader),
             writer,
             moves: 0,
+            cancel: None,
         }
+    }
+
+    /// Gives up waiting for a confirmation once `cancel` returns true (checked every 50 ms).
+    pub fn with_cancel(mut self, cancel: fn() -> bool) -> Self {
+        self.cancel = Some(cancel);
+        self
     }
 
     fn ask(&mut self, what: &str) -> Result<(), BaseError> {
@@ -32,12 +42,11 @@ impl<R: BufRead, W: Write> ManualBase<R, W> {
             self.moves
         )?;
         self.writer.flush()?;
-        let mut line = String::new();
-        if self.reader.read_line(&mut line)? == 0 {
+        let Some(line) = self.answers.next(what, self.cancel)? else {
             return Err(BaseError::Closed {
                 command: what.to_string(),
             });
-        }
+        };
         if line.trim().eq_ignore_ascii_case("q") {
             return Err(BaseError::Aborted);
         }
@@ -45,7 +54,7 @@ impl<R: BufRead, W: Write> ManualBase<R, W> {
     }
 }
 
-impl<R: BufRead, W: Write> MotionBase for ManualBase<R, W> {
+impl<W: Write> MotionBase for ManualBase<W> {
     type Error = BaseError;
     fn rotate(&mut self, angle_rad: f64) -> Result<(), BaseError> {
         let side = if angle_rad >= 0.0 {

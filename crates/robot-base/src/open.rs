@@ -59,17 +59,27 @@ impl BaseSpec {
         })
     }
 
-    /// Opens the base (a serial port with a 5 s read timeout, re-armed while a move lasts).
-    pub fn open(&self) -> Result<DynBase, BaseError> {
+    /// Opens the base (a serial port with a 5 s read timeout, re-armed while a move lasts);
+    /// with `cancel`, waiting for a move's answer is given up once it returns true.
+    pub fn open(&self, cancel: Option<fn() -> bool>) -> Result<DynBase, BaseError> {
+        fn line<W: std::io::Write>(b: LineBase<W>, cancel: Option<fn() -> bool>) -> LineBase<W> {
+            match cancel {
+                Some(c) => b.with_cancel(c),
+                None => b,
+            }
+        }
         match self {
-            Self::Stdio => Ok(Box::new(LineBase::new(
-                BufReader::new(std::io::stdin()),
-                std::io::stdout(),
+            Self::Stdio => Ok(Box::new(line(
+                LineBase::new(BufReader::new(std::io::stdin()), std::io::stdout()),
+                cancel,
             ))),
-            Self::Manual => Ok(Box::new(ManualBase::new(
-                BufReader::new(std::io::stdin()),
-                std::io::stderr(),
-            ))),
+            Self::Manual => {
+                let b = ManualBase::new(BufReader::new(std::io::stdin()), std::io::stderr());
+                Ok(Box::new(match cancel {
+                    Some(c) => b.with_cancel(c),
+                    None => b,
+                }))
+            }
             Self::Serial { path, baud } => {
                 let serial = |action| {
                     move |source| BaseError::Serial {
@@ -83,15 +93,18 @@ impl BaseSpec {
                     .open()
                     .map_err(serial("open"))?;
                 let reader = port.try_clone().map_err(serial("share"))?;
-                Ok(Box::new(LineBase::new(BufReader::new(reader), port)))
+                Ok(Box::new(line(
+                    LineBase::new(BufReader::new(reader), port),
+                    cancel,
+                )))
             }
         }
     }
 }
 
-/// Opens the base named by `spec` (see [`BaseSpec::parse`]).
-pub fn open_base(spec: &str) -> Result<DynBase, BaseError> {
-    BaseSpec::parse(spec)?.open()
+/// Opens the base named by `spec` (see [`BaseSpec::parse`] and [`BaseSpec::open`]).
+pub fn open_base(spec: &str, cancel: Option<fn() -> bool>) -> Result<DynBase, BaseError> {
+    BaseSpec::parse(spec)?.open(cancel)
 }
 
 #[cfg(test)]
@@ -121,17 +134,17 @@ mod tests {
 
     #[test]
     fn bad_base_specs_are_named() {
-        let e = open_base("tcp:1234").err().unwrap();
+        let e = open_base("tcp:1234", None).err().unwrap();
         assert!(e.is_spec_error());
         assert_eq!(
             e.to_string(),
             "'tcp:1234': expected stdio, serial:PATH[@BAUD] or manual"
         );
-        let e = open_base("serial:/dev/x@fast").err().unwrap();
+        let e = open_base("serial:/dev/x@fast", None).err().unwrap();
         assert!(e.is_spec_error() && e.to_string().contains("'fast'"), "{e}");
-        let e = open_base("serial:@9600").err().unwrap();
+        let e = open_base("serial:@9600", None).err().unwrap();
         assert!(matches!(e, BaseError::NoSerialPath { .. }), "{e}");
-        let e = open_base("serial:/no/such/port").err().unwrap();
+        let e = open_base("serial:/no/such/port", None).err().unwrap();
         assert!(!e.is_spec_error());
         assert!(e.to_string().contains("/no/such/port"), "{e}");
     }

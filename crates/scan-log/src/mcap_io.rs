@@ -285,6 +285,15 @@ impl PartialMcap {
         self.with(|w| w.write_metadata(&record))
     }
 
+    /// Closes and removes the unfinished file: an earlier file at the final path is kept.
+    pub(crate) fn discard(&mut self) {
+        if self.writer.take().is_some()
+            && let Err(e) = std::fs::remove_file(&self.tmp_path)
+        {
+            tracing::warn!("cannot remove {}: {e}", self.tmp_path.display());
+        }
+    }
+
     /// Writes the summary, syncs and renames the file; nothing when already finished.
     pub(crate) fn finish(&mut self) -> Result<(), LogError> {
         let Some(mut writer) = self.writer.take() else {
@@ -526,6 +535,16 @@ fn pose_msg(p: Pose2, seq: u64, stamp: &Time) -> PoseMsg {
 
 impl Drop for McapRecorder {
     fn drop(&mut self) {
+        // Dropped before its first scan (the run failed to start): nothing to keep, and an
+        // earlier recording at the same path stays as it was.
+        if self.file.is_open() && self.seq == 0 {
+            tracing::info!(
+                "recording {} dropped before its first scan: not written",
+                self.path().display()
+            );
+            self.file.discard();
+            return;
+        }
         if self.file.is_open() {
             match self.finish_inner() {
                 Ok(n) => tracing::warn!(

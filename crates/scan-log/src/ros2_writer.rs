@@ -470,6 +470,16 @@ impl Ros2Recorder {
 
 impl Drop for Ros2Recorder {
     fn drop(&mut self) {
+        // Dropped before its first scan (the run failed to start): nothing to keep, and an
+        // earlier recording at the same path stays as it was.
+        if self.file.is_open() && self.seq == 0 {
+            tracing::info!(
+                "recording {} dropped before its first scan: not written",
+                self.path().display()
+            );
+            self.file.discard();
+            return;
+        }
         if self.file.is_open() {
             match self.finish_inner() {
                 Ok(n) => tracing::warn!(

@@ -31,3 +31,16 @@ impl<M: MotionBase + ?Sized> MotionBase for &mut M {
         (**self).stop()
     }
 }
+
+impl<M: MotionBase + ?Sized> MotionBase for Box<M> {
+    type Error = M::Error;
+    fn rotate(&mut self, angle_rad: f64) -> Result<(), Self::Error> {
+        (**self).rotate(angle_rad)
+    }
+    fn forward(&mut self, distance_m: f64) -> Result<(), Self::Error> {
+        (**self).forward(distance_m)
+    }
+    fn stop(&mut self) -> Result<(), Self::Error> {
+        (**self).stop()
+    }
+}

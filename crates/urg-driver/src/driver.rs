@@ -303,7 +303,7 @@ impl<T: Read + Write> LaserSource for Urg<T> {
 }
 
 /// Reconnection delays: `initial`, multiplied by `factor` after each failure, capped at `max`.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy)]
 pub struct Backoff {
     /// First delay.
     pub initial: Duration,
@@ -313,6 +313,8 @@ pub struct Backoff {
     pub factor: f64,
     /// Give up after this many attempts (`None`: never).
     pub max_attempts: Option<u32>,
+    /// Give up as soon as this returns true (checked every 50 ms while waiting): Ctrl-C.
+    pub cancel: Option<fn() -> bool>,
 }
 
 impl Default for Backoff {
@@ -322,11 +324,31 @@ impl Default for Backoff {
             max: Duration::from_secs(5),
             factor: 2.0,
             max_attempts: None,
+            cancel: None,
         }
     }
 }
 
 impl Backoff {
+    /// Waits `d` in naps of at most 50 ms; false when `cancel` ended the wait.
+    fn wait(&self, d: Duration) -> bool {
+        let Some(cancelled) = self.cancel else {
+            std::thread::sleep(d);
+            return true;
+        };
+        let until = std::time::Instant::now() + d;
+        loop {
+            if cancelled() {
+                return false;
+            }
+            let left = until.saturating_duration_since(std::time::Instant::now());
+            if left.is_zero() {
+                return true;
+            }
+            std::thread::sleep(left.min(Duration::from_millis(50)));
+        }
+    }
+
     /// The delay before attempt `n` (0-based).
     pub fn delay(&self, attempt: u32) -> Duration {
         let f = self.factor.max(1.0).powi(attempt.min(64) as i32);
@@ -361,7 +383,10 @@ where
             "connect attempt {} failed ({err}); retrying in {d:?}",
             attempt + 1
         );
-        std::thread::sleep(d);
+        if !backoff.wait(d) {
+            tracing::info!("reconnecting given up: a stop was asked for");
+            return Err(err);
+        }
         attempt += 1;
     }
 }

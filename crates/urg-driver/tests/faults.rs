@@ -361,6 +361,7 @@ fn unplug_gives_disconnected_and_reconnect_resumes_the_stream() {
         max: Duration::from_millis(40),
         factor: 2.0,
         max_attempts: Some(50),
+        cancel: None,
     };
     let mut src = ReconnectingUrg::new(open, streaming(), backoff).unwrap();
     src.next_scan().unwrap();

@@ -16,6 +16,7 @@ fn backoff() -> Backoff {
         max: Duration::from_millis(400),
         factor: 2.0,
         max_attempts: Some(40),
+        cancel: None,
     }
 }
 

@@ -18,6 +18,7 @@ fn backoff() -> Backoff {
         max: Duration::from_millis(200),
         factor: 2.0,
         max_attempts: Some(40),
+        cancel: None,
     }
 }
 

@@ -540,7 +540,7 @@ fn explore_robot(
         let mut on_leg = live_leg(&live);
         explore_loop(
             &mut laser,
-            &mut *base,
+            &mut base,
             config,
             params,
             start,

@@ -142,12 +142,14 @@ impl LoopOptions {
     }
 }
 
-/// Reconnection of a Hokuyo that disappears mid-run: 0.1 s doubling to 2 s, for about 30 s.
+/// Reconnection of a Hokuyo that disappears mid-run: 0.1 s doubling to 2 s, for about 30 s,
+/// given up at once on Ctrl-C or SIGTERM.
 pub const RECONNECT: urg_driver::Backoff = urg_driver::Backoff {
     initial: std::time::Duration::from_millis(100),
     max: std::time::Duration::from_secs(2),
     factor: 2.0,
     max_attempts: Some(20),
+    cancel: Some(crate::interrupt::requested),
 };
 
 /// Opens the Hokuyo at `port` (a serial device or `tcp:HOST:PORT`) so that it survives being

@@ -9,6 +9,7 @@ use scan_types::{LaserSource, Pose2, Scan, WorldPoint};
 use super::sim::thread_cpu_time_s;
 use crate::outputs::{PointOut, PoseOut, Reason, Summary};
 use crate::runloop::run_loop_legs;
+use robot_base::StopOnDrop;
 
 /// Arguments of `robot-app run`.
 #[derive(Debug, Args)]
@@ -37,15 +38,22 @@ pub struct RunArgs {
     pub live: crate::live::LiveOptions,
 }
 
-/// Opens the base named by `--base SPEC` ([`robot_base::open_base`]).
-pub fn open_base(spec: &str) -> anyhow::Result<robot_base::DynBase> {
-    robot_base::open_base(spec).map_err(|e| {
-        let e = anyhow::Error::new(e);
-        match e.downcast_ref::<robot_base::BaseError>() {
-            Some(b) if b.is_spec_error() => anyhow::anyhow!("--base {e:#}"),
-            _ => e,
-        }
-    })
+/// Opens the base named by `--base SPEC` ([`robot_base::open_base`]): a move's answer is no
+/// longer waited for once Ctrl-C or SIGTERM came, and the base is sent `stop` when dropped
+/// unless `stop` was its last command (an early error still stops the robot).
+pub fn open_base(spec: &str) -> anyhow::Result<StopOnDrop<robot_base::DynBase>> {
+    if spec == "stdio" {
+        crate::outputs::stdout_is_base();
+    }
+    robot_base::open_base(spec, Some(crate::interrupt::requested))
+        .map(StopOnDrop::new)
+        .map_err(|e| {
+            let e = anyhow::Error::new(e);
+            match e.downcast_ref::<robot_base::BaseError>() {
+                Some(b) if b.is_spec_error() => anyhow::anyhow!("--base {e:#}"),
+                _ => e,
+            }
+        })
 }
 
 /// Runs `robot-app run`.
@@ -102,7 +110,7 @@ pub fn run(mut args: RunArgs) -> anyhow::Result<()> {
     let cpu0 = thread_cpu_time_s();
     let run = run_loop_legs(
         &mut laser,
-        &mut *base,
+        &mut base,
         &config,
         (start, goal),
         None,
