@@ -486,3 +486,40 @@ fn a_replay_whose_reader_goes_away_still_finishes_its_recording() {
     let bytes = std::fs::read(&rec).unwrap();
     assert!(bytes.ends_with(b"\x89MCAP0\r\n"), "{} bytes", bytes.len());
 }
+
+#[test]
+fn a_log_clock_that_jumps_is_not_slept_through() {
+    // exp1's first six lines, the third's time stamp (microseconds) moved 10^15 us (31 years)
+    // ahead: real-time pacing would sleep for years on it.
+    let dir = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string(shared("data/breezyslam/exp1.dat")).unwrap();
+    let mut lines: Vec<String> = text.lines().take(6).map(str::to_string).collect();
+    let (stamp, rest) = lines[2].split_once(' ').unwrap();
+    lines[2] = format!(
+        "{} {rest}",
+        stamp.parse::<u64>().unwrap() + 1_000_000_000_000_000
+    );
+    let log = dir.path().join("jump.dat");
+    std::fs::write(&log, lines.join("\n") + "\n").unwrap();
+    let t = std::time::Instant::now();
+    let o = robot_app(&["replay", log.to_str().unwrap(), "--format", "json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(t.elapsed() < std::time::Duration::from_secs(20));
+    assert_eq!(String::from_utf8_lossy(&o.stdout).lines().count(), 6);
+    assert!(stderr(&o).contains("clock jumps"), "{}", stderr(&o));
+}
+
+#[test]
+fn an_image_too_large_for_a_world_is_refused_from_its_header() {
+    // A PGM header claiming 20 000 x 20 000 pixels (400 MB to decode, 1.6 GB as RGBA) and no
+    // pixels: refused by the size its header gives, before anything is decoded.
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("big.pgm");
+    std::fs::write(&path, b"P5\n20000 20000\n255\n").unwrap();
+    let p = path.to_str().unwrap();
+    fails_naming_with(
+        robot_app_capped(&["world", "info", p]),
+        &["world", "info", p],
+        &["big.pgm", "20000 x 20000 pixels", "at most 64000000 pixels"],
+    );
+}

@@ -60,6 +60,16 @@ impl ScanGeometry {
         if ray_count == 0 {
             return bad("ray_count", 0.0, "must be at least 1");
         }
+        // No scanner sweeps more than a full turn (and a geometry that did would make the
+        // kernels that wrap bearings around allocate a turn's worth of rays per turn).
+        let turn = std::f64::consts::TAU * (1.0 + 1e-9);
+        if increment_rad.abs() > turn || increment_rad.abs() * (ray_count - 1) as f64 > turn {
+            return bad(
+                "increment_rad",
+                increment_rad,
+                "spans more than a full turn from the first ray to the last",
+            );
+        }
         if !(min_range_m.is_finite() && min_range_m >= 0.0) {
             return bad("min_range_m", min_range_m, "must be finite and >= 0");
         }
@@ -260,6 +270,12 @@ mod tests {
         assert!(ScanGeometry::new(0.0, 0.1, 3, 0.0, f64::INFINITY).is_err());
         let e = ScanGeometry::new(0.0, 0.1, 0, 0.0, 1.0).unwrap_err();
         assert!(e.to_string().contains("ray_count"), "{e}");
+        // More than a full turn: 1e6 rad between rays, or 361 rays a degree apart.
+        let e = ScanGeometry::new(0.0, 1e6, 2, 0.0, 1.0).unwrap_err();
+        assert!(e.to_string().contains("increment_rad"), "{e}");
+        assert!(ScanGeometry::new(0.0, 1f64.to_radians(), 362, 0.0, 1.0).is_err());
+        // A full turn itself is a scanner's (360 rays a degree apart: 359 deg first to last).
+        assert!(ScanGeometry::centred(361, 2.0 * PI, 0.0, 1.0).is_ok());
     }
 
     #[test]

@@ -535,7 +535,9 @@ fn toml_bitmap(src: &TomlSource, file: &TomlWorld) -> Result<Option<Bitmap>, Sim
         ));
     }
     let img_path = src.path.parent().unwrap_or(Path::new(".")).join(&v.image);
-    let img = image::open(&img_path)
+    let img = std::fs::read(&img_path)
+        .map_err(|e| e.to_string())
+        .and_then(|bytes| crate::stage::decode_image(&bytes))
         .map_err(|e| src.err(line, "bitmap.image", format!("{}: {e}", img_path.display())))?
         .to_rgba8();
     let mut bitmap = bitmap_from_image(&img, v.size, v.centre, v.boundary, v.dark_below)

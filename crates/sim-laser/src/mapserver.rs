@@ -214,10 +214,10 @@ impl World {
                     path: path.to_path_buf(),
                     source,
                 })?;
-                let img = image::load_from_memory(&bytes)
-                    .map_err(|e| SimError::Image {
+                let img = crate::stage::decode_image(&bytes)
+                    .map_err(|message| SimError::Image {
                         path: path.to_path_buf(),
-                        message: e.to_string(),
+                        message,
                     })?
                     .to_rgba8();
                 let probe = crate::stage::bitmap_from_image(
@@ -258,10 +258,12 @@ pub(crate) fn map_server_bitmap(path: &Path, unknown: UnknownCells) -> Result<Bi
     })?;
     let y = parse_map_yaml(&text, path)?;
     let img_path = path.parent().unwrap_or(Path::new(".")).join(&y.image);
-    let img = image::open(&img_path)
-        .map_err(|e| SimError::Image {
+    let img = std::fs::read(&img_path)
+        .map_err(|e| e.to_string())
+        .and_then(|bytes| crate::stage::decode_image(&bytes))
+        .map_err(|message| SimError::Image {
             path: img_path.clone(),
-            message: e.to_string(),
+            message,
         })?
         .to_rgb8();
     let (w, h) = (img.width() as usize, img.height() as usize);

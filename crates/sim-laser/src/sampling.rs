@@ -97,10 +97,28 @@ pub struct FreeSpace {
     component: Vec<u32>,
 }
 
+/// Most cells a [`FreeSpace`] rasterises (16 million: 200 m x 200 m at 0.05 m).
+pub const MAX_FREE_CELLS: usize = 16_000_000;
+
 impl FreeSpace {
-    /// Rasterises `world` at `cell_m`, keeping cells at least `room_m` from any obstacle.
+    /// Rasterises `world` at `cell_m` (coarser when that would take more than
+    /// [`MAX_FREE_CELLS`] cells), keeping cells at least `room_m` from any obstacle.
     pub fn new(world: &World, room_m: f64, cell_m: f64) -> Self {
         let (lo, hi) = world.bounds();
+        let area = (hi.x_m() - lo.x_m()) * (hi.y_m() - lo.y_m());
+        let fine = area / (cell_m * cell_m);
+        let cell_m = if fine > MAX_FREE_CELLS as f64 {
+            let coarse = (area / MAX_FREE_CELLS as f64).sqrt() * 1.01;
+            tracing::warn!(
+                world = world.name(),
+                cell_m,
+                coarse_m = coarse,
+                "world too large to rasterise at the cell size asked for; coarser cells"
+            );
+            coarse
+        } else {
+            cell_m
+        };
         let nx = ((hi.x_m() - lo.x_m()) / cell_m).ceil().max(1.0) as usize;
         let ny = ((hi.y_m() - lo.y_m()) / cell_m).ceil().max(1.0) as usize;
         let centre = |ix: usize, iy: usize| {

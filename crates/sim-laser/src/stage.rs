@@ -87,10 +87,10 @@ pub fn stage_world_from_bytes(
 ) -> Result<World, SimError> {
     let path = Path::new(name);
     check_size(path, size_m)?;
-    let img = image::load_from_memory(bytes)
-        .map_err(|e| SimError::Image {
+    let img = decode_image(bytes)
+        .map_err(|message| SimError::Image {
             path: path.to_path_buf(),
-            message: e.to_string(),
+            message,
         })?
         .to_rgba8();
     let bitmap =
@@ -135,4 +135,24 @@ impl World {
             boundary,
         )
     }
+}
+
+/// Most pixels of a world's image (as many as a world's grid may have cells).
+pub(crate) const MAX_IMAGE_PIXELS: u64 = 64_000_000;
+
+/// Decodes an image file's `bytes`, refusing one of more than [`MAX_IMAGE_PIXELS`] from its
+/// header, before decoding it.
+pub(crate) fn decode_image(bytes: &[u8]) -> Result<image::DynamicImage, String> {
+    let reader = || {
+        image::ImageReader::new(std::io::Cursor::new(bytes))
+            .with_guessed_format()
+            .map_err(|e| e.to_string())
+    };
+    let (w, h) = reader()?.into_dimensions().map_err(|e| e.to_string())?;
+    if u64::from(w) * u64::from(h) > MAX_IMAGE_PIXELS {
+        return Err(format!(
+            "{w} x {h} pixels; at most {MAX_IMAGE_PIXELS} pixels"
+        ));
+    }
+    reader()?.decode().map_err(|e| e.to_string())
 }

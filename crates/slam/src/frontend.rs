@@ -211,6 +211,21 @@ impl FrontEndParams {
                 "must be at least 0.01 and at least linear_window_m / 1000",
             ));
         }
+        // The smoothing kernel spans 2.5 standard deviations a side, in cells.
+        if self.smoothing_m > 20.0 * self.resolution_m {
+            return Err(bad(
+                "smoothing_m",
+                self.smoothing_m,
+                "must be at most 20 times resolution_m",
+            ));
+        }
+        if self.min_range_m >= self.max_range_m {
+            return Err(bad(
+                "min_range_m",
+                self.min_range_m,
+                "must be below max_range_m",
+            ));
+        }
         if self.angular_window_deg > 180.0 {
             return Err(bad(
                 "angular_window_deg",
@@ -896,6 +911,27 @@ mod tests {
         for bad in [-0.01, 1e-310, 0.0005, f64::NAN, f64::INFINITY] {
             let e = with(bad).expect_err("refused").to_string();
             assert!(e.contains("icp_target_voxel_m"), "{bad}: {e}");
+        }
+        // A smoothing of 100 m on 0.1 m cells would ask for a kernel of 5 000 x 5 000 cells
+        // per scan; a hit window that is empty, for nothing.
+        for (params, key) in [
+            (
+                FrontEndParams {
+                    smoothing_m: 100.0,
+                    ..FrontEndParams::default()
+                },
+                "smoothing_m",
+            ),
+            (
+                FrontEndParams {
+                    min_range_m: 60.0,
+                    ..FrontEndParams::default()
+                },
+                "min_range_m",
+            ),
+        ] {
+            let e = params.validate().expect_err("refused").to_string();
+            assert!(e.contains(key), "{e}");
         }
         let stride = FrontEndParams {
             icp_stride: 0,

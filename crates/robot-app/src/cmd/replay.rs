@@ -56,6 +56,10 @@ pub struct ReplayArgs {
 /// Cell size of the map the live view builds from a log's poses, metres.
 const LIVE_MAP_RESOLUTION_M: f64 = 0.05;
 
+/// A log's clock that jumps back, or ahead by more than this between two scans, seconds,
+/// restarts the pacing of `--rate` (a log cut and joined, a clock reset).
+const MAX_CLOCK_GAP_S: f64 = 10.0;
+
 /// Runs `robot-app replay`, printing to stdout.
 pub fn run(args: ReplayArgs) -> anyhow::Result<()> {
     let stdout = std::io::stdout();
@@ -80,7 +84,9 @@ pub fn run_to<W: Write>(args: &ReplayArgs, out: &mut W) -> anyhow::Result<()> {
     };
     let mut live = args.live.start(LIVE_MAP_RESOLUTION_M)?;
     let started = Instant::now();
-    let mut first_stamp: Option<f64> = None;
+    // (log stamp, wall time since the start) pacing counts from, and the last scan's stamp.
+    let mut first_stamp: Option<(f64, f64)> = None;
+    let mut last_stamp: Option<f64> = None;
     let mut k = 0usize;
     let mut interrupted = false;
     let mut stopped: Option<anyhow::Error> = None;
@@ -95,17 +101,27 @@ pub fn run_to<W: Write>(args: &ReplayArgs, out: &mut W) -> anyhow::Result<()> {
             Err(e) => return Err(e).context("replaying"),
         };
         let scan = &rec.scan;
-        // Pace by the log's own clock.
+        // Pace by the log's own clock; where it jumps back or ahead by more than
+        // MAX_CLOCK_GAP_S, pacing starts over from this scan.
         if args.rate > 0.0 && scan.host_time_s.is_finite() {
-            let t0 = *first_stamp.get_or_insert(scan.host_time_s);
-            let due = (scan.host_time_s - t0) / args.rate;
             let now = started.elapsed().as_secs_f64();
-            // At most a minute: a log's clock can jump.
-            if due > now && !crate::interrupt::sleep(Duration::from_secs_f64((due - now).min(60.0)))
-            {
-                interrupted = true;
-                break;
+            let (t0, w0) = *first_stamp.get_or_insert((scan.host_time_s, now));
+            let gap = scan.host_time_s - last_stamp.unwrap_or(scan.host_time_s);
+            if !(0.0..=MAX_CLOCK_GAP_S).contains(&gap) {
+                tracing::warn!(
+                    scan = k,
+                    gap_s = gap,
+                    "the log's clock jumps here; paced from this scan on"
+                );
+                first_stamp = Some((scan.host_time_s, now));
+            } else {
+                let due = w0 + (scan.host_time_s - t0) / args.rate;
+                if due > now && !crate::interrupt::sleep(Duration::from_secs_f64(due - now)) {
+                    interrupted = true;
+                    break;
+                }
             }
+            last_stamp = Some(scan.host_time_s);
         }
         // A reader that has gone away ends the replay; the recording is still finished.
         if let Err(e) = super::scan::print_scan(out, args.format, k, &geometry, scan, || {
