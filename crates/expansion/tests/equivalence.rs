@@ -8,12 +8,12 @@ use proptest::prelude::*;
 use proptest::test_runner::{Config, RngSeed};
 use scan_types::{Scan, ScanGeometry};
 
-/// A random geometry (1..=96 rays, any field of view up to more than a full turn, either
-/// sweep direction) and a radius.
+/// A random geometry (1..=96 rays, any field of view up to a full turn, either sweep
+/// direction) and a radius.
 fn geometry_and_radius() -> impl Strategy<Value = (ScanGeometry, f64)> {
     (
         1usize..=96,
-        0.05f64..7.0,
+        0.05f64..std::f64::consts::TAU,
         any::<bool>(),
         -3.2f64..3.2,
         prop_oneof![Just(4.0), 0.5f64..30.0],
