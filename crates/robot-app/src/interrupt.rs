@@ -41,17 +41,7 @@ pub fn check() -> anyhow::Result<()> {
 
 /// Waits `duration` in naps of at most 50 ms; false when a stop request ended the wait.
 pub fn sleep(duration: std::time::Duration) -> bool {
-    let until = std::time::Instant::now() + duration;
-    loop {
-        if requested() {
-            return false;
-        }
-        let left = until.saturating_duration_since(std::time::Instant::now());
-        if left.is_zero() {
-            return true;
-        }
-        std::thread::sleep(left.min(std::time::Duration::from_millis(50)));
-    }
+    scan_types::sleep_unless(duration, requested)
 }
 
 /// The error a command returns when it stopped because of a signal, after writing its

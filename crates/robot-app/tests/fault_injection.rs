@@ -446,9 +446,7 @@ fn a_base_that_never_moves_is_not_taken_to_have_arrived_one_leg_away() {
     // The target lies 1 m straight ahead, one leg; the base answers `done` and never moves,
     // so every scan is the first one. After a commanded 1 m the side walls pair either way,
     // but the wall ahead is still 3 m away: the laser puts the travel at 0, not the command.
-    let p = Profile::of(Model::Urg04lx);
-    let server =
-        urg_driver::serve_pty(p.clone(), FixedSource::room(p.params.geometry())).expect("a pty");
+    let server = fixed_room();
     let out = tempfile::tempdir().unwrap();
     let mut child = Command::new(env!("CARGO_BIN_EXE_robot-app"))
         .args(["run", "--port", server.path(), "--goal=1,0"])
@@ -538,9 +536,7 @@ fn sigint_while_a_move_goes_unanswered_still_stops_the_base_and_exits_130() {
 #[test]
 fn a_run_that_fails_to_start_stops_the_base_and_keeps_the_earlier_recording() {
     // A target too far for any map: refused after the base and the sensor are open.
-    let p = Profile::of(Model::Urg04lx);
-    let server =
-        urg_driver::serve_pty(p.clone(), FixedSource::room(p.params.geometry())).expect("a pty");
+    let server = fixed_room();
     let out = tempfile::tempdir().unwrap();
     let run = out.path().join("run");
     std::fs::create_dir_all(&run).unwrap();
@@ -560,4 +556,10 @@ fn a_run_that_fails_to_start_stops_the_base_and_keeps_the_earlier_recording() {
     assert_eq!(String::from_utf8_lossy(&o.stdout), "stop\n", "{stderr}");
     assert_eq!(std::fs::read(run.join("run.mcap")).unwrap(), earlier);
     assert_no_partial_files(&run);
+}
+
+/// The emulator's fixed room (a URG-04LX) on a pseudo-terminal.
+fn fixed_room() -> PtyServer {
+    let p = Profile::of(Model::Urg04lx);
+    urg_driver::serve_pty(p.clone(), FixedSource::room(p.params.geometry())).expect("a pty")
 }

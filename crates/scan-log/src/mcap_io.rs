@@ -285,12 +285,32 @@ impl PartialMcap {
         self.with(|w| w.write_metadata(&record))
     }
 
-    /// Closes and removes the unfinished file: an earlier file at the final path is kept.
-    pub(crate) fn discard(&mut self) {
-        if self.writer.take().is_some()
-            && let Err(e) = std::fs::remove_file(&self.tmp_path)
-        {
-            tracing::warn!("cannot remove {}: {e}", self.tmp_path.display());
+    /// What a recorder dropped unfinished (an error or a panic unwinding) does with its file
+    /// of `scans` scans: finishes it, or, before the first scan (a run that failed to start),
+    /// removes it, so that an earlier file at the final path stays as it was.
+    pub(crate) fn close_dropped(&mut self, scans: u64) {
+        if !self.is_open() {
+            return;
+        }
+        if scans == 0 {
+            tracing::info!(
+                "recording {} dropped before its first scan: not written",
+                self.path.display()
+            );
+            self.writer = None;
+            if let Err(e) = std::fs::remove_file(&self.tmp_path) {
+                tracing::warn!("cannot remove {}: {e}", self.tmp_path.display());
+            }
+            return;
+        }
+        match self.finish() {
+            Ok(()) => tracing::warn!(
+                "recording {} dropped without finish: closed it with {scans} scans",
+                self.path.display()
+            ),
+            Err(e) => {
+                tracing::error!("recording dropped without finish and could not be closed: {e}")
+            }
         }
     }
 
@@ -535,27 +555,7 @@ fn pose_msg(p: Pose2, seq: u64, stamp: &Time) -> PoseMsg {
 
 impl Drop for McapRecorder {
     fn drop(&mut self) {
-        // Dropped before its first scan (the run failed to start): nothing to keep, and an
-        // earlier recording at the same path stays as it was.
-        if self.file.is_open() && self.seq == 0 {
-            tracing::info!(
-                "recording {} dropped before its first scan: not written",
-                self.path().display()
-            );
-            self.file.discard();
-            return;
-        }
-        if self.file.is_open() {
-            match self.finish_inner() {
-                Ok(n) => tracing::warn!(
-                    "recording {} dropped without finish: closed it with {n} scans",
-                    self.path().display()
-                ),
-                Err(e) => {
-                    tracing::error!("recording dropped without finish and could not be closed: {e}")
-                }
-            }
-        }
+        self.file.close_dropped(self.seq);
     }
 }
 

@@ -470,27 +470,7 @@ impl Ros2Recorder {
 
 impl Drop for Ros2Recorder {
     fn drop(&mut self) {
-        // Dropped before its first scan (the run failed to start): nothing to keep, and an
-        // earlier recording at the same path stays as it was.
-        if self.file.is_open() && self.seq == 0 {
-            tracing::info!(
-                "recording {} dropped before its first scan: not written",
-                self.path().display()
-            );
-            self.file.discard();
-            return;
-        }
-        if self.file.is_open() {
-            match self.finish_inner() {
-                Ok(n) => tracing::warn!(
-                    "recording {} dropped without finish: closed it with {n} scans",
-                    self.path().display()
-                ),
-                Err(e) => {
-                    tracing::error!("recording dropped without finish and could not be closed: {e}")
-                }
-            }
-        }
+        self.file.close_dropped(self.seq);
     }
 }
 

@@ -33,6 +33,7 @@ mod source;
 #[cfg(feature = "testkit")]
 pub mod testkit;
 mod truth;
+mod wait;
 
 pub use angle::{angle_diff_rad, normalize_angle_rad};
 pub use error::ScanTypesError;
@@ -46,6 +47,7 @@ pub use pose::{Pose2, RobotPoint, WorldPoint};
 pub use scan::{RayStatus, Scan};
 pub use source::LaserSource;
 pub use truth::GroundTruth;
+pub use wait::sleep_unless;
 
 /// Re-export of the nalgebra version the types are built on.
 pub use nalgebra;

@@ -332,20 +332,12 @@ impl Default for Backoff {
 impl Backoff {
     /// Waits `d` in naps of at most 50 ms; false when `cancel` ended the wait.
     fn wait(&self, d: Duration) -> bool {
-        let Some(cancelled) = self.cancel else {
-            std::thread::sleep(d);
-            return true;
-        };
-        let until = std::time::Instant::now() + d;
-        loop {
-            if cancelled() {
-                return false;
+        match self.cancel {
+            Some(cancelled) => scan_types::sleep_unless(d, cancelled),
+            None => {
+                std::thread::sleep(d);
+                true
             }
-            let left = until.saturating_duration_since(std::time::Instant::now());
-            if left.is_zero() {
-                return true;
-            }
-            std::thread::sleep(left.min(Duration::from_millis(50)));
         }
     }
 
