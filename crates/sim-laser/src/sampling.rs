@@ -102,7 +102,7 @@ pub const MAX_FREE_CELLS: usize = 16_000_000;
 
 impl FreeSpace {
     /// Rasterises `world` at `cell_m` (coarser when that would take more than
-    /// [`MAX_FREE_CELLS`] cells), keeping cells at least `room_m` from any obstacle.
+    /// `MAX_FREE_CELLS` (16 million) cells), keeping cells at least `room_m` from any obstacle.
     pub fn new(world: &World, room_m: f64, cell_m: f64) -> Self {
         let (lo, hi) = world.bounds();
         let area = (hi.x_m() - lo.x_m()) * (hi.y_m() - lo.y_m());
